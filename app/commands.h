@@ -1,0 +1,15 @@
+#pragma once
+// Every subcommand of the confluent binary. Each Make*Command lives in its own cmd_*.cc file;
+// main.cc lists them.
+
+#include "app/command_line.h"
+
+namespace confluent::app {
+
+CommandSpec MakeCalibConvertCommand();   // cmd_calib.cc
+CommandSpec MakeCalibCheckCommand();     // cmd_calib.cc
+CommandSpec MakeCalibrateCommand();      // cmd_calibrate.cc
+CommandSpec MakeCaptureInfoCommand();    // cmd_capture.cc
+CommandSpec MakeMeshInfoCommand();       // cmd_mesh.cc
+
+}  // namespace confluent::app

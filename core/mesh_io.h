@@ -1,0 +1,30 @@
+#pragma once
+// Reading and writing meshes: OBJ (with MTL and texture) and PLY (ascii and binary little-endian).
+
+#include <string>
+
+#include "core/mesh.h"
+
+namespace confluent {
+
+// Options for writing a mesh.
+struct MeshWriteOptions {
+  bool binary = true;           // PLY only: binary little-endian instead of ascii
+  bool write_colors = true;     // write per-vertex colours when the mesh has them
+  bool write_face_labels = true;  // PLY only: a per-face int property "label"
+};
+
+// Reads an .obj or .ply file (chosen by extension, case-insensitive). Polygons are
+// fan-triangulated. OBJ: reads `v` (with optional r g b), `vt`, `f` (all index forms,
+// negative indices), `mtllib`/`map_Kd` (texture_path made absolute). PLY: ascii and
+// binary_little_endian, vertex x y z [red green blue (uchar or float)], face vertex_indices,
+// optional face "label".
+// Throws InputError naming the file on a missing file, bad syntax, out-of-range indices or
+// non-finite coordinates.
+Mesh ReadMesh(const std::string& path);
+
+// Writes `mesh` as .obj or .ply by extension. OBJ writes an MTL next to it when the mesh has
+// a texture. Written atomically (temporary file, then rename). Throws OutputError on failure.
+void WriteMesh(const std::string& path, const Mesh& mesh, const MeshWriteOptions& options = {});
+
+}  // namespace confluent

@@ -1,0 +1,74 @@
+#include "tests/support/test_support.h"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+namespace confluent::testing {
+namespace fs = std::filesystem;
+
+TempDir::TempDir() {
+  std::random_device random;
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    fs::path candidate = fs::temp_directory_path() /
+                         ("confluent_test_" + std::to_string(getpid()) + "_" + std::to_string(random()));
+    if (fs::create_directory(candidate)) {
+      path_ = candidate.string();
+      return;
+    }
+  }
+  std::abort();
+}
+
+TempDir::~TempDir() {
+  std::error_code ignored;
+  fs::remove_all(path_, ignored);
+}
+
+namespace {
+std::string ShellQuote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+std::string Slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+}  // namespace
+
+CommandResult RunConfluent(const std::vector<std::string>& args) {
+  const char* binary = std::getenv("CONFLUENT_BIN");
+  CommandResult result;
+  if (binary == nullptr) {
+    result.stderr_text = "CONFLUENT_BIN is not set (run the tests through ctest)";
+    return result;
+  }
+  TempDir scratch;
+  std::string command = ShellQuote(binary);
+  for (const auto& arg : args) command += " " + ShellQuote(arg);
+  command += " </dev/null >" + scratch / "out" + " 2>" + scratch / "err";
+  int status = std::system(command.c_str());
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.stdout_text = Slurp(scratch / "out");
+  result.stderr_text = Slurp(scratch / "err");
+  return result;
+}
+
+std::string SharedDataPath(const std::string& relative) {
+  const char* root = std::getenv("CONFLUENT_SHARED_DATA");
+  fs::path base = root ? fs::path(root) : fs::path("../shared/data");
+  fs::path full = base / relative;
+  std::error_code error;
+  if (!fs::exists(full, error)) return {};
+  return fs::absolute(full).string();
+}
+
+}  // namespace confluent::testing

@@ -1,0 +1,37 @@
+#pragma once
+// Helpers shared by the gtest suites: temporary folders, the confluent binary, shared data.
+
+#include <string>
+#include <vector>
+
+namespace confluent::testing {
+
+// A fresh empty folder under the system temp dir, removed when the object dies.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::string& path() const { return path_; }
+  std::string operator/(const std::string& name) const { return path_ + "/" + name; }
+
+ private:
+  std::string path_;
+};
+
+// Result of running the confluent binary.
+struct CommandResult {
+  int exit_code = -1;
+  std::string stdout_text;
+  std::string stderr_text;
+};
+
+// Runs the `confluent` binary (path from $CONFLUENT_BIN, set by ctest) with `args`.
+CommandResult RunConfluent(const std::vector<std::string>& args);
+
+// Absolute path of ../shared/data/<relative>, or "" when it does not exist. Tests call
+// GTEST_SKIP() with a message when this is empty.
+std::string SharedDataPath(const std::string& relative);
+
+}  // namespace confluent::testing
