@@ -7,9 +7,11 @@
 namespace confluent::app {
 
 CommandSpec MakeCalibConvertCommand();   // cmd_calib.cc
-CommandSpec MakeCalibCheckCommand();     // cmd_calib.cc
+CommandSpec MakeCalibCheckCommand();     // cmd_calib_check.cc
 CommandSpec MakeCalibrateCommand();      // cmd_calibrate.cc
 CommandSpec MakeCaptureInfoCommand();    // cmd_capture.cc
 CommandSpec MakeMeshInfoCommand();       // cmd_mesh.cc
+CommandSpec MakeRenderInfoCommand();     // cmd_render_info.cc
+CommandSpec MakeSynthCommand();          // cmd_synth.cc
 
 }  // namespace confluent::app

@@ -20,6 +20,8 @@ std::vector<CommandSpec> AllCommands() {
       MakeCalibCheckCommand(),
       MakeCalibrateCommand(),
       MakeMeshInfoCommand(),
+      MakeRenderInfoCommand(),
+      MakeSynthCommand(),
   };
 }
 

@@ -1,0 +1,80 @@
+#pragma once
+// The recorded camera folder (DESIGN.md section 3): calibration, frames, plates, masks.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "calib/camera.h"
+#include "core/image.h"
+#include "core/progress.h"
+
+namespace confluent {
+
+// Options for opening a capture folder.
+struct CaptureOptions {
+  // Read the header of every image (size check, readable format). Off: first and last only.
+  bool check_every_image_header = true;
+  // Fully decode every frame of every camera (slow; finds truncated or corrupt images).
+  bool decode_every_frame = false;
+  // Called once per decoded camera-frame when decode_every_frame is set.
+  ProgressCallback progress;
+};
+
+enum class FrameSource { kImages, kVideos };
+
+// An opened, validated capture folder. Holds open video decoders, so it is a class.
+class Capture {
+ public:
+  // Opens and validates `root`: intri.yml/extri.yml readable and consistent; camera names in
+  // the calibration and images/ (or videos/) agree; every camera has the same frame count with
+  // no gaps; image sizes match the calibration; videos decode. Throws InputError naming the
+  // file or folder and the problem (unequal counts list every camera and its count).
+  static Capture Open(const std::string& root, const CaptureOptions& options = {});
+
+  Capture(Capture&&) noexcept;
+  Capture& operator=(Capture&&) noexcept;
+  ~Capture();
+
+  const std::string& root() const { return root_; }
+  const Rig& rig() const { return rig_; }
+  int num_cameras() const { return rig_.size(); }
+  int num_frames() const { return num_frames_; }
+  FrameSource source() const { return source_; }
+
+  // Path of frame `frame` of camera `camera` (images/ layout; for videos the video path).
+  std::string FramePath(int camera, int frame) const;
+  // Frame as 8-bit RGB (grey and RGBA images are converted). Throws InputError naming the file.
+  Image ReadFrame(int camera, int frame) const;
+
+  // Precomputed masks (masks/<cam>/<frame>.png), present for every camera?
+  bool has_masks() const { return has_masks_; }
+  std::string MaskPath(int camera, int frame) const;
+  // Mask as 1-channel 8-bit, 0 or 255 (thresholded at 128). Throws InputError naming the file.
+  Image ReadMask(int camera, int frame) const;
+
+  // Clean plate background/<cam>.png|jpg, or "" when absent.
+  std::string BackgroundPath(int camera) const;
+  // Optional scan.ply|obj and correspondences.json, or "" when absent.
+  const std::string& scan_path() const { return scan_path_; }
+  const std::string& correspondences_path() const { return correspondences_path_; }
+
+ private:
+  Capture();
+  struct VideoCache;
+  std::string root_;
+  Rig rig_;
+  int num_frames_ = 0;
+  FrameSource source_ = FrameSource::kImages;
+  std::vector<std::vector<std::string>> frame_paths_;  // [camera][frame], images only
+  std::vector<std::string> video_paths_;               // [camera], videos only
+  bool has_masks_ = false;
+  std::string scan_path_;
+  std::string correspondences_path_;
+  std::unique_ptr<VideoCache> videos_;
+};
+
+// Converts any 1-4 channel 8/16-bit/float image to 8-bit RGB.
+Image ToRgb8(const Image& image);
+
+}  // namespace confluent

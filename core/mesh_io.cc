@@ -1,0 +1,864 @@
+#include "core/mesh_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <string_view>
+#include <vector>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace confluent {
+namespace fs = std::filesystem;
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Shared helpers
+
+std::string LowerExtension(const std::string& path) {
+  std::string extension = fs::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension;
+}
+
+// The whole file as bytes; InputError when it is missing or unreadable.
+std::string ReadWholeFile(const std::string& path) {
+  std::error_code error;
+  if (!fs::exists(path, error)) throw InputError(path, "no such file");
+  if (fs::is_directory(path, error)) throw InputError(path, "is a folder, not a mesh file");
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) throw InputError(path, std::string("cannot be read: ") + std::strerror(errno));
+  std::string data;
+  char chunk[1 << 16];
+  const std::uintmax_t size = fs::file_size(path, error);
+  if (!error) data.reserve(static_cast<std::size_t>(size));
+  std::size_t got = 0;
+  while ((got = std::fread(chunk, 1, sizeof(chunk), file)) > 0) data.append(chunk, got);
+  const bool failed = std::ferror(file) != 0;
+  std::fclose(file);
+  if (failed) throw InputError(path, "read error");
+  return data;
+}
+
+bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+
+// Parses the whole of `token` as a double (a leading '+' is allowed).
+bool ParseDouble(std::string_view token, double* value) {
+  const char* begin = token.data();
+  const char* end = begin + token.size();
+  if (begin < end && *begin == '+') ++begin;
+  const auto [ptr, ec] = std::from_chars(begin, end, *value);
+  return ec == std::errc() && ptr == end && begin < end;
+}
+
+// Parses the whole of `token` as an int (a leading '+' is allowed).
+bool ParseInt(std::string_view token, int* value) {
+  const char* begin = token.data();
+  const char* end = begin + token.size();
+  if (begin < end && *begin == '+') ++begin;
+  const auto [ptr, ec] = std::from_chars(begin, end, *value);
+  return ec == std::errc() && ptr == end && begin < end;
+}
+
+std::string Quote(std::string_view token) {
+  std::string text(token.substr(0, 40));
+  if (token.size() > 40) text += "...";
+  return "'" + text + "'";
+}
+
+// Appends the shortest text that reads back as exactly `value`.
+template <typename T>
+void AppendNumber(std::string* out, T value) {
+  char buffer[40];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out->append(buffer, result.ptr);
+}
+
+void AppendInt(std::string* out, long long value) {
+  char buffer[24];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out->append(buffer, result.ptr);
+}
+
+// Writes `bytes` to `path` (called on the temporary file of WriteAtomically).
+void WriteBytes(const std::string& path, const std::string& bytes) {
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) throw OutputError(path, std::string("cannot open for writing: ") + std::strerror(errno));
+  const std::size_t written = std::fwrite(bytes.data(), 1, bytes.size(), file);
+  const bool failed = written != bytes.size() || std::fflush(file) != 0;
+  if (std::fclose(file) != 0 || failed) throw OutputError(path, "write failed (disk full or no permission?)");
+}
+
+// `target` relative to the folder `base` when possible (both made absolute), else absolute.
+std::string RelativeOrAbsolute(const std::string& target, const fs::path& base) {
+  const fs::path absolute_target = fs::absolute(target).lexically_normal();
+  const fs::path relative = absolute_target.lexically_relative(fs::absolute(base).lexically_normal());
+  return relative.empty() ? absolute_target.string() : relative.generic_string();
+}
+
+// Resolves a texture file name found in `referencing_file` to an absolute, normal path.
+std::string ResolveTexture(std::string name, const fs::path& referencing_file) {
+  std::replace(name.begin(), name.end(), '\\', '/');
+  fs::path texture(name);
+  if (texture.is_relative()) texture = referencing_file.parent_path() / texture;
+  return fs::absolute(texture).lexically_normal().string();
+}
+
+std::string_view Trim(std::string_view text) {
+  while (!text.empty() && IsSpace(text.front())) text.remove_prefix(1);
+  while (!text.empty() && IsSpace(text.back())) text.remove_suffix(1);
+  return text;
+}
+
+// Splits `line` at whitespace into `tokens` (views into `line`).
+void SplitTokens(std::string_view line, std::vector<std::string_view>* tokens) {
+  tokens->clear();
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && IsSpace(line[i])) ++i;
+    const std::size_t start = i;
+    while (i < line.size() && !IsSpace(line[i])) ++i;
+    if (i > start) tokens->push_back(line.substr(start, i - start));
+  }
+}
+
+// Copies flat vectors into the mesh's Eigen matrices.
+void FillMesh(const std::vector<double>& positions, const std::vector<int>& faces, Mesh* mesh) {
+  mesh->vertices = Eigen::Map<const RowMatrixX3d>(positions.data(), static_cast<Eigen::Index>(positions.size() / 3), 3);
+  mesh->faces = Eigen::Map<const RowMatrixX3i>(faces.data(), static_cast<Eigen::Index>(faces.size() / 3), 3);
+}
+
+// ---------------------------------------------------------------------------------------------
+// OBJ
+
+// The diffuse texture named in the MTL file `mtl_path` for `material` (or the first one found),
+// resolved to an absolute path; "" when the MTL is missing or names none.
+std::string TextureFromMtl(const fs::path& mtl_path, const std::string& material) {
+  std::error_code error;
+  if (!fs::is_regular_file(mtl_path, error)) return {};
+  const std::string text = ReadWholeFile(mtl_path.string());
+  std::string current, first_texture, chosen;
+  std::vector<std::string_view> tokens;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view line = Trim(std::string_view(text).substr(start, end - start));
+    start = end + 1;
+    SplitTokens(line, &tokens);
+    if (tokens.size() < 2) continue;
+    if (tokens[0] == "newmtl") {
+      current = std::string(Trim(line.substr(6)));
+    } else if (tokens[0] == "map_Kd") {
+      // Options ("-s 1 1 1 file.png") come first; the file name is then the last token.
+      const bool has_options = tokens[1].front() == '-';
+      const std::string name(has_options ? tokens.back() : Trim(line.substr(6)));
+      if (first_texture.empty()) first_texture = name;
+      if (!material.empty() && current == material && chosen.empty()) chosen = name;
+    }
+  }
+  if (chosen.empty()) chosen = first_texture;
+  return chosen.empty() ? std::string() : ResolveTexture(chosen, mtl_path);
+}
+
+// Resolves a 1-based (or negative, relative) OBJ index against `count` defined so far.
+bool ResolveObjIndex(int index, int count, int* resolved) {
+  if (index > 0) *resolved = index - 1;
+  else if (index < 0) *resolved = count + index;
+  else return false;
+  return *resolved >= 0 && *resolved < count;
+}
+
+Mesh ReadObj(const std::string& path) {
+  const std::string text = ReadWholeFile(path);
+  std::vector<double> positions, uvs;
+  std::vector<float> colors;
+  std::vector<int> faces, face_uvs;
+  int num_normals = 0, num_colored = 0;
+  bool face_without_uv = false;
+  std::string mtllib, first_material;
+  std::vector<std::string_view> tokens;
+  std::vector<int> corner_v, corner_vt;
+  int line_number = 0;
+  std::size_t start = 0;
+  auto fail = [&](const std::string& problem) -> InputError {
+    return InputError(path, "line " + std::to_string(line_number) + ": " + problem);
+  };
+  while (start < text.size()) {
+    const char* line_begin = text.data() + start;
+    const void* newline = std::memchr(line_begin, '\n', text.size() - start);
+    const std::size_t end = newline ? static_cast<const char*>(newline) - text.data() : text.size();
+    const std::string_view line(line_begin, end - start);
+    start = end + 1;
+    ++line_number;
+    SplitTokens(line, &tokens);
+    if (tokens.empty() || tokens[0].front() == '#') continue;
+    const std::string_view keyword = tokens[0];
+    if (keyword == "v") {
+      const std::size_t n = tokens.size() - 1;
+      if (n != 3 && n != 4 && n != 6 && n != 7)
+        throw fail("expected 'v x y z [w]' or 'v x y z r g b', got " + std::to_string(n) + " numbers");
+      double values[7];
+      for (std::size_t i = 0; i < n; ++i)
+        if (!ParseDouble(tokens[i + 1], &values[i])) throw fail("expected a number, got " + Quote(tokens[i + 1]));
+      for (int i = 0; i < 3; ++i) {
+        if (!std::isfinite(values[i])) throw fail("non-finite vertex coordinate " + Quote(tokens[i + 1]));
+        positions.push_back(values[i]);
+      }
+      if (n >= 6) {
+        for (int i = 3; i < 6; ++i) colors.push_back(static_cast<float>(values[i]));
+        ++num_colored;
+      } else {
+        colors.insert(colors.end(), 3, 0.0f);
+      }
+    } else if (keyword == "vt") {
+      if (tokens.size() < 2 || tokens.size() > 4) throw fail("expected 'vt u [v [w]]'");
+      double uv[2] = {0.0, 0.0};
+      for (std::size_t i = 1; i < tokens.size() && i <= 2; ++i)
+        if (!ParseDouble(tokens[i], &uv[i - 1]) || !std::isfinite(uv[i - 1]))
+          throw fail("expected a finite number, got " + Quote(tokens[i]));
+      uvs.push_back(uv[0]);
+      uvs.push_back(uv[1]);
+    } else if (keyword == "vn") {
+      ++num_normals;
+    } else if (keyword == "f") {
+      if (tokens.size() < 4) throw fail("a face needs at least 3 vertices");
+      corner_v.clear();
+      corner_vt.clear();
+      const int num_vertices = static_cast<int>(positions.size() / 3);
+      const int num_uvs = static_cast<int>(uvs.size() / 2);
+      for (std::size_t i = 1; i < tokens.size(); ++i) {
+        const std::string_view corner = tokens[i];
+        const std::size_t slash1 = corner.find('/');
+        const std::string_view v_text = corner.substr(0, slash1);
+        std::string_view vt_text, vn_text;
+        if (slash1 != std::string_view::npos) {
+          const std::size_t slash2 = corner.find('/', slash1 + 1);
+          vt_text = corner.substr(slash1 + 1, slash2 == std::string_view::npos ? std::string_view::npos : slash2 - slash1 - 1);
+          if (slash2 != std::string_view::npos) vn_text = corner.substr(slash2 + 1);
+        }
+        int index = 0, resolved = 0;
+        if (!ParseInt(v_text, &index)) throw fail("bad face corner " + Quote(corner));
+        if (!ResolveObjIndex(index, num_vertices, &resolved))
+          throw fail("face index " + std::to_string(index) + " out of range (" + std::to_string(num_vertices) +
+                     " vertices so far)");
+        corner_v.push_back(resolved);
+        if (!vt_text.empty()) {
+          if (!ParseInt(vt_text, &index)) throw fail("bad face corner " + Quote(corner));
+          if (!ResolveObjIndex(index, num_uvs, &resolved))
+            throw fail("texture index " + std::to_string(index) + " out of range (" + std::to_string(num_uvs) +
+                       " texture coordinates so far)");
+          corner_vt.push_back(resolved);
+        }
+        if (!vn_text.empty()) {
+          if (!ParseInt(vn_text, &index) || !ResolveObjIndex(index, num_normals, &resolved))
+            throw fail("bad or out-of-range normal index in " + Quote(corner));
+        }
+      }
+      const bool has_vt = corner_vt.size() == corner_v.size();
+      if (!has_vt && !corner_vt.empty()) throw fail("face mixes corners with and without texture index");
+      if (!has_vt) face_without_uv = true;
+      // Fan triangulation: (0, i, i+1).
+      for (std::size_t i = 1; i + 1 < corner_v.size(); ++i) {
+        faces.insert(faces.end(), {corner_v[0], corner_v[i], corner_v[i + 1]});
+        if (has_vt) face_uvs.insert(face_uvs.end(), {corner_vt[0], corner_vt[i], corner_vt[i + 1]});
+      }
+    } else if (keyword == "mtllib") {
+      if (mtllib.empty()) mtllib = std::string(Trim(line.substr(line.find("mtllib") + 6)));
+    } else if (keyword == "usemtl") {
+      if (first_material.empty() && tokens.size() >= 2) first_material = std::string(tokens[1]);
+    }
+    // Everything else (o, g, s, l, p, vp, comments, ...) carries nothing we store.
+  }
+  Mesh mesh;
+  FillMesh(positions, faces, &mesh);
+  if (num_colored > 0 && num_colored == mesh.num_vertices())
+    mesh.colors = Eigen::Map<const RowMatrixX3f>(colors.data(), mesh.num_vertices(), 3);
+  if (!face_without_uv && !face_uvs.empty()) {
+    mesh.uvs = Eigen::Map<const RowMatrixX2d>(uvs.data(), static_cast<Eigen::Index>(uvs.size() / 2), 2);
+    mesh.face_uvs = Eigen::Map<const RowMatrixX3i>(face_uvs.data(), mesh.num_faces(), 3);
+  }
+  if (!mtllib.empty()) {
+    std::string name = mtllib;
+    std::replace(name.begin(), name.end(), '\\', '/');
+    fs::path mtl_path = fs::path(path).parent_path() / name;
+    std::error_code error;
+    // "mtllib a.mtl b.mtl" names several files; use the first.
+    if (!fs::exists(mtl_path, error) && name.find(' ') != std::string::npos)
+      mtl_path = fs::path(path).parent_path() / name.substr(0, name.find(' '));
+    mesh.texture_path = TextureFromMtl(mtl_path, first_material);
+  }
+  return mesh;
+}
+
+void WriteObj(const std::string& path, const Mesh& mesh, const MeshWriteOptions& options) {
+  const bool colors = options.write_colors && mesh.has_colors();
+  const bool uvs = mesh.has_uvs();
+  const bool texture = !mesh.texture_path.empty();
+  const fs::path obj_path(path);
+  const std::string mtl_name = obj_path.stem().string() + ".mtl";
+  std::string out;
+  out.reserve(static_cast<std::size_t>(mesh.num_vertices()) * 40 + static_cast<std::size_t>(mesh.num_faces()) * 30);
+  out += "# written by confluent\n";
+  if (texture) {
+    std::string mtl = "# written by confluent\nnewmtl material0\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\nmap_Kd ";
+    mtl += RelativeOrAbsolute(mesh.texture_path, obj_path.parent_path()) + "\n";
+    WriteTextFile((obj_path.parent_path() / mtl_name).string(), mtl);
+    out += "mtllib " + mtl_name + "\nusemtl material0\n";
+  }
+  for (int i = 0; i < mesh.num_vertices(); ++i) {
+    out += "v ";
+    for (int k = 0; k < 3; ++k) {
+      if (k > 0) out += ' ';
+      AppendNumber(&out, mesh.vertices(i, k));
+    }
+    if (colors)
+      for (int k = 0; k < 3; ++k) {
+        out += ' ';
+        AppendNumber(&out, mesh.colors(i, k));
+      }
+    out += '\n';
+  }
+  if (uvs)
+    for (Eigen::Index i = 0; i < mesh.uvs.rows(); ++i) {
+      out += "vt ";
+      AppendNumber(&out, mesh.uvs(i, 0));
+      out += ' ';
+      AppendNumber(&out, mesh.uvs(i, 1));
+      out += '\n';
+    }
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    out += 'f';
+    for (int k = 0; k < 3; ++k) {
+      out += ' ';
+      AppendInt(&out, mesh.faces(f, k) + 1);
+      if (uvs) {
+        out += '/';
+        AppendInt(&out, mesh.face_uvs(f, k) + 1);
+      }
+    }
+    out += '\n';
+  }
+  WriteAtomically(path, [&](const std::string& temporary) { WriteBytes(temporary, out); });
+}
+
+// ---------------------------------------------------------------------------------------------
+// PLY
+
+enum class PlyType { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kFloat32, kFloat64 };
+enum class PlyFormat { kAscii, kBinaryLittleEndian, kBinaryBigEndian };
+
+struct PlyProperty {
+  std::string name;
+  PlyType type = PlyType::kFloat32;
+  bool is_list = false;
+  PlyType count_type = PlyType::kUInt8;
+};
+
+struct PlyElement {
+  std::string name;
+  std::size_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+bool ParsePlyType(std::string_view name, PlyType* type) {
+  static const std::pair<const char*, PlyType> kNames[] = {
+      {"char", PlyType::kInt8},     {"int8", PlyType::kInt8},       {"uchar", PlyType::kUInt8},
+      {"uint8", PlyType::kUInt8},   {"short", PlyType::kInt16},     {"int16", PlyType::kInt16},
+      {"ushort", PlyType::kUInt16}, {"uint16", PlyType::kUInt16},   {"int", PlyType::kInt32},
+      {"int32", PlyType::kInt32},   {"uint", PlyType::kUInt32},     {"uint32", PlyType::kUInt32},
+      {"float", PlyType::kFloat32}, {"float32", PlyType::kFloat32}, {"double", PlyType::kFloat64},
+      {"float64", PlyType::kFloat64}};
+  for (const auto& [text, value] : kNames)
+    if (name == text) {
+      *type = value;
+      return true;
+    }
+  return false;
+}
+
+std::size_t PlyTypeSize(PlyType type) {
+  switch (type) {
+    case PlyType::kInt8: case PlyType::kUInt8: return 1;
+    case PlyType::kInt16: case PlyType::kUInt16: return 2;
+    case PlyType::kInt32: case PlyType::kUInt32: case PlyType::kFloat32: return 4;
+    case PlyType::kFloat64: return 8;
+  }
+  return 0;
+}
+
+// Reads PLY body values one at a time, in any of the three formats.
+class PlyBodyReader {
+ public:
+  PlyBodyReader(const std::string& path, const std::string& text, std::size_t offset, PlyFormat format,
+                int header_lines)
+      : path_(path), data_(text.data() + offset), end_(text.data() + text.size()), format_(format),
+        line_(header_lines + 1) {}
+
+  // Where we are, for error messages ("vertex 12" or "face 3").
+  void SetLocation(const std::string& element, std::size_t index) {
+    element_ = &element;
+    index_ = index;
+  }
+
+  // The next value, converted to double.
+  double Read(PlyType type) {
+    if (format_ == PlyFormat::kAscii) return ReadAscii();
+    const std::size_t size = PlyTypeSize(type);
+    if (static_cast<std::size_t>(end_ - data_) < size)
+      throw InputError(path_, "truncated: the file ends inside " + *element_ + " " + std::to_string(index_));
+    unsigned char bytes[8];
+    std::memcpy(bytes, data_, size);
+    data_ += size;
+    if (format_ == PlyFormat::kBinaryBigEndian) std::reverse(bytes, bytes + size);
+    switch (type) {
+      case PlyType::kInt8: return Load<std::int8_t>(bytes);
+      case PlyType::kUInt8: return Load<std::uint8_t>(bytes);
+      case PlyType::kInt16: return Load<std::int16_t>(bytes);
+      case PlyType::kUInt16: return Load<std::uint16_t>(bytes);
+      case PlyType::kInt32: return Load<std::int32_t>(bytes);
+      case PlyType::kUInt32: return Load<std::uint32_t>(bytes);
+      case PlyType::kFloat32: return Load<float>(bytes);
+      case PlyType::kFloat64: return Load<double>(bytes);
+    }
+    return 0.0;
+  }
+
+  // Reads and discards one property (scalar or list).
+  void Skip(const PlyProperty& property) {
+    if (!property.is_list) {
+      Read(property.type);
+      return;
+    }
+    const std::size_t count = ReadCount(property);
+    if (format_ != PlyFormat::kAscii) {
+      const std::size_t bytes = count * PlyTypeSize(property.type);
+      if (static_cast<std::size_t>(end_ - data_) < bytes)
+        throw InputError(path_, "truncated: the file ends inside " + *element_ + " " + std::to_string(index_));
+      data_ += bytes;
+      return;
+    }
+    for (std::size_t i = 0; i < count; ++i) Read(property.type);
+  }
+
+  // The length prefix of a list property; InputError if negative or absurd.
+  std::size_t ReadCount(const PlyProperty& property) {
+    const double count = Read(property.count_type);
+    if (!(count >= 0 && count < 1e6 && count == std::floor(count)))
+      Fail("bad list length " + std::to_string(count) + " in property '" + property.name + "'");
+    return static_cast<std::size_t>(count);
+  }
+
+  // Prefix for error messages about the current value.
+  std::string Where() const {
+    if (format_ == PlyFormat::kAscii) return "line " + std::to_string(line_) + ": ";
+    return *element_ + " " + std::to_string(index_) + ": ";
+  }
+
+  [[noreturn]] void Fail(const std::string& problem) const { throw InputError(path_, Where() + problem); }
+
+ private:
+  template <typename T>
+  static double Load(const unsigned char* bytes) {
+    T value;
+    std::memcpy(&value, bytes, sizeof(T));
+    return static_cast<double>(value);
+  }
+
+  double ReadAscii() {
+    while (data_ < end_ && IsSpace(*data_)) {
+      if (*data_ == '\n') ++line_;
+      ++data_;
+    }
+    if (data_ >= end_)
+      throw InputError(path_, "truncated: the file ends inside " + *element_ + " " + std::to_string(index_));
+    const char* start = data_;
+    while (data_ < end_ && !IsSpace(*data_)) ++data_;
+    double value = 0.0;
+    const std::string_view token(start, static_cast<std::size_t>(data_ - start));
+    if (!ParseDouble(token, &value)) Fail("expected a number, got " + Quote(token));
+    return value;
+  }
+
+  const std::string& path_;
+  const char* data_;
+  const char* end_;
+  PlyFormat format_;
+  int line_;
+  const std::string* element_ = nullptr;
+  std::size_t index_ = 0;
+};
+
+int FindProperty(const PlyElement& element, std::initializer_list<const char*> names) {
+  for (const char* name : names)
+    for (std::size_t i = 0; i < element.properties.size(); ++i)
+      if (element.properties[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+// Scale that maps a colour of `type` to [0,1].
+float ColorScale(PlyType type) {
+  switch (type) {
+    case PlyType::kUInt8: return 1.0f / 255.0f;
+    case PlyType::kUInt16: return 1.0f / 65535.0f;
+    case PlyType::kFloat32: case PlyType::kFloat64: return 1.0f;
+    default: return 1.0f / 255.0f;
+  }
+}
+
+Mesh ReadPly(const std::string& path) {
+  const std::string text = ReadWholeFile(path);
+  // --- header
+  std::size_t position = 0;
+  int header_lines = 0;
+  auto next_header_line = [&](std::string_view* line) {
+    if (position >= text.size()) return false;
+    std::size_t end = text.find('\n', position);
+    if (end == std::string::npos) end = text.size();
+    *line = Trim(std::string_view(text).substr(position, end - position));
+    position = end + 1;
+    ++header_lines;
+    return true;
+  };
+  auto header_error = [&](const std::string& problem) {
+    return InputError(path, "line " + std::to_string(header_lines) + ": " + problem);
+  };
+  std::string_view line;
+  if (!next_header_line(&line) || line != "ply") throw InputError(path, "not a PLY file (no 'ply' on the first line)");
+  PlyFormat format = PlyFormat::kAscii;
+  bool have_format = false, have_end = false;
+  std::vector<PlyElement> elements;
+  std::string texture_file;
+  std::vector<std::string_view> tokens;
+  while (next_header_line(&line)) {
+    SplitTokens(line, &tokens);
+    if (tokens.empty()) continue;
+    if (tokens[0] == "end_header") {
+      have_end = true;
+      break;
+    }
+    if (tokens[0] == "comment" || tokens[0] == "obj_info") {
+      // MeshLab convention: "comment TextureFile name.png".
+      if (tokens.size() >= 3 && tokens[0] == "comment" && tokens[1] == "TextureFile")
+        texture_file = std::string(Trim(line.substr(line.find("TextureFile") + 11)));
+    } else if (tokens[0] == "format") {
+      if (tokens.size() < 2) throw header_error("incomplete format line");
+      if (tokens[1] == "ascii") format = PlyFormat::kAscii;
+      else if (tokens[1] == "binary_little_endian") format = PlyFormat::kBinaryLittleEndian;
+      else if (tokens[1] == "binary_big_endian") format = PlyFormat::kBinaryBigEndian;
+      else throw header_error("unknown format " + Quote(tokens[1]));
+      have_format = true;
+    } else if (tokens[0] == "element") {
+      double count = 0;
+      if (tokens.size() != 3 || !ParseDouble(tokens[2], &count) || count < 0 || count != std::floor(count) ||
+          count > 2e9)
+        throw header_error("expected 'element NAME COUNT'");
+      elements.push_back({std::string(tokens[1]), static_cast<std::size_t>(count), {}});
+    } else if (tokens[0] == "property") {
+      if (elements.empty()) throw header_error("property before any element");
+      PlyProperty property;
+      if (tokens.size() == 5 && tokens[1] == "list") {
+        property.is_list = true;
+        if (!ParsePlyType(tokens[2], &property.count_type) || !ParsePlyType(tokens[3], &property.type))
+          throw header_error("unknown property type in " + Quote(line));
+        property.name = std::string(tokens[4]);
+      } else if (tokens.size() == 3) {
+        if (!ParsePlyType(tokens[1], &property.type)) throw header_error("unknown property type " + Quote(tokens[1]));
+        property.name = std::string(tokens[2]);
+      } else {
+        throw header_error("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
+      }
+      elements.back().properties.push_back(property);
+    } else {
+      throw header_error("unknown header keyword " + Quote(tokens[0]));
+    }
+  }
+  if (!have_end) throw InputError(path, "truncated header (no end_header)");
+  if (!have_format) throw InputError(path, "header has no format line");
+
+  // --- the layout of the elements we understand
+  const PlyElement* vertex_element = nullptr;
+  for (const auto& element : elements)
+    if (element.name == "vertex") vertex_element = &element;
+  if (vertex_element == nullptr) throw InputError(path, "no vertex element");
+  const int x = FindProperty(*vertex_element, {"x"}), y = FindProperty(*vertex_element, {"y"}),
+            z = FindProperty(*vertex_element, {"z"});
+  if (x < 0 || y < 0 || z < 0) throw InputError(path, "vertex element lacks x, y or z");
+  for (int p : {x, y, z})
+    if (vertex_element->properties[p].is_list) throw InputError(path, "vertex x, y, z must not be lists");
+  const std::size_t num_vertices = vertex_element->count;
+  if (num_vertices > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw InputError(path, "too many vertices");
+
+  Mesh mesh;
+  std::vector<double> positions(num_vertices * 3);
+  std::vector<float> colors;
+  std::vector<double> uvs;
+  std::vector<int> faces, face_uvs;
+  std::vector<int> labels;
+  std::vector<int> polygon;
+  std::vector<double> polygon_uv;
+  PlyBodyReader reader(path, text, position, format, header_lines);
+
+  for (const PlyElement& element : elements) {
+    if (&element == vertex_element) {
+      // Slot per property: 0..2 position, 3..5 colour, 6..7 per-vertex uv, -1 ignored.
+      std::vector<int> slot(element.properties.size(), -1);
+      slot[x] = 0;
+      slot[y] = 1;
+      slot[z] = 2;
+      const int color[3] = {FindProperty(element, {"red", "r", "diffuse_red"}),
+                            FindProperty(element, {"green", "g", "diffuse_green"}),
+                            FindProperty(element, {"blue", "b", "diffuse_blue"})};
+      float color_scale[3] = {1, 1, 1};
+      const bool has_color = color[0] >= 0 && color[1] >= 0 && color[2] >= 0;
+      if (has_color) {
+        for (int k = 0; k < 3; ++k) {
+          if (element.properties[color[k]].is_list) throw InputError(path, "vertex colours must not be lists");
+          slot[color[k]] = 3 + k;
+          color_scale[k] = ColorScale(element.properties[color[k]].type);
+        }
+        colors.resize(num_vertices * 3);
+      }
+      const int u = FindProperty(element, {"u", "s", "texture_u"}), v = FindProperty(element, {"v", "t", "texture_v"});
+      const bool has_uv = u >= 0 && v >= 0 && !element.properties[u].is_list && !element.properties[v].is_list;
+      if (has_uv) {
+        slot[u] = 6;
+        slot[v] = 7;
+        uvs.resize(num_vertices * 2);
+      }
+      for (std::size_t i = 0; i < num_vertices; ++i) {
+        reader.SetLocation(element.name, i);
+        for (std::size_t p = 0; p < element.properties.size(); ++p) {
+          const int s = slot[p];
+          if (s < 0) {
+            reader.Skip(element.properties[p]);
+            continue;
+          }
+          const double value = reader.Read(element.properties[p].type);
+          if (s < 3) {
+            if (!std::isfinite(value)) reader.Fail("vertex " + std::to_string(i) + " has a non-finite coordinate");
+            positions[i * 3 + s] = value;
+          } else if (s < 6) {
+            colors[i * 3 + (s - 3)] = static_cast<float>(value) * color_scale[s - 3];
+          } else {
+            uvs[i * 2 + (s - 6)] = value;
+          }
+        }
+      }
+      if (has_uv) {
+        mesh.uvs = Eigen::Map<const RowMatrixX2d>(uvs.data(), static_cast<Eigen::Index>(num_vertices), 2);
+        uvs.clear();
+      }
+    } else if (element.name == "face") {
+      const int indices = FindProperty(element, {"vertex_indices", "vertex_index"});
+      if (indices < 0 || !element.properties[indices].is_list)
+        throw InputError(path, "face element lacks a vertex_indices list");
+      const int label = FindProperty(element, {"label"});
+      const bool has_label = label >= 0 && !element.properties[label].is_list;
+      const int texcoord = FindProperty(element, {"texcoord"});
+      const bool has_texcoord = texcoord >= 0 && element.properties[texcoord].is_list;
+      faces.reserve(element.count * 3);
+      if (has_label) labels.reserve(element.count);
+      bool texcoords_complete = has_texcoord;
+      for (std::size_t f = 0; f < element.count; ++f) {
+        reader.SetLocation(element.name, f);
+        int face_label = 0;
+        polygon.clear();
+        polygon_uv.clear();
+        for (std::size_t p = 0; p < element.properties.size(); ++p) {
+          const PlyProperty& property = element.properties[p];
+          if (static_cast<int>(p) == indices) {
+            const std::size_t count = reader.ReadCount(property);
+            for (std::size_t k = 0; k < count; ++k) {
+              const double index = reader.Read(property.type);
+              if (!(index >= 0 && index < static_cast<double>(num_vertices)))
+                reader.Fail("face " + std::to_string(f) + " has vertex index " + std::to_string(static_cast<long long>(index)) +
+                            " out of range (" + std::to_string(num_vertices) + " vertices)");
+              polygon.push_back(static_cast<int>(index));
+            }
+            if (count < 3) reader.Fail("face " + std::to_string(f) + " has fewer than 3 vertices");
+          } else if (has_label && static_cast<int>(p) == label) {
+            face_label = static_cast<int>(reader.Read(property.type));
+          } else if (has_texcoord && static_cast<int>(p) == texcoord) {
+            const std::size_t count = reader.ReadCount(property);
+            for (std::size_t k = 0; k < count; ++k) polygon_uv.push_back(reader.Read(property.type));
+          } else {
+            reader.Skip(property);
+          }
+        }
+        if (has_texcoord && polygon_uv.size() != 2 * polygon.size()) texcoords_complete = false;
+        for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
+          faces.insert(faces.end(), {polygon[0], polygon[k], polygon[k + 1]});
+          if (has_label) labels.push_back(face_label);
+          if (texcoords_complete) {
+            for (std::size_t corner : {std::size_t{0}, k, k + 1}) {
+              face_uvs.push_back(static_cast<int>(uvs.size() / 2));
+              uvs.push_back(polygon_uv[2 * corner]);
+              uvs.push_back(polygon_uv[2 * corner + 1]);
+            }
+          }
+        }
+      }
+      if (texcoords_complete && !faces.empty()) {
+        mesh.uvs = Eigen::Map<const RowMatrixX2d>(uvs.data(), static_cast<Eigen::Index>(uvs.size() / 2), 2);
+        mesh.face_uvs = Eigen::Map<const RowMatrixX3i>(face_uvs.data(), static_cast<Eigen::Index>(face_uvs.size() / 3), 3);
+      }
+    } else {
+      for (std::size_t i = 0; i < element.count; ++i) {
+        reader.SetLocation(element.name, i);
+        for (const auto& property : element.properties) reader.Skip(property);
+      }
+    }
+  }
+  FillMesh(positions, faces, &mesh);
+  if (!colors.empty()) mesh.colors = Eigen::Map<const RowMatrixX3f>(colors.data(), mesh.num_vertices(), 3);
+  // Per-vertex uvs (u, v properties) index the vertices directly.
+  if (mesh.uvs.rows() == mesh.num_vertices() && mesh.face_uvs.rows() == 0 && mesh.num_vertices() > 0)
+    mesh.face_uvs = mesh.faces;
+  if (!labels.empty()) mesh.face_labels = std::move(labels);
+  if (!texture_file.empty()) mesh.texture_path = ResolveTexture(texture_file, path);
+  return mesh;
+}
+
+template <typename T>
+void AppendBinary(std::string* out, T value) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  // PLY binary output is little-endian; convert on big-endian hosts.
+  if constexpr (sizeof(T) > 1) {
+    const std::uint16_t probe = 1;
+    unsigned char first;
+    std::memcpy(&first, &probe, 1);
+    if (first == 0) std::reverse(bytes, bytes + sizeof(T));
+  }
+  out->append(bytes, sizeof(T));
+}
+
+std::uint8_t ColorByte(float value) {
+  const float clamped = std::min(1.0f, std::max(0.0f, std::isfinite(value) ? value : 0.0f));
+  return static_cast<std::uint8_t>(std::lround(clamped * 255.0f));
+}
+
+void WritePly(const std::string& path, const Mesh& mesh, const MeshWriteOptions& options) {
+  const bool binary = options.binary;
+  const bool doubles = options.double_precision;
+  const bool colors = options.write_colors && mesh.has_colors();
+  const bool labels = options.write_face_labels && mesh.has_face_labels();
+  const bool uvs = mesh.has_uvs();
+  const int n = mesh.num_vertices(), m = mesh.num_faces();
+  std::string out;
+  out.reserve(256 + static_cast<std::size_t>(n) * (binary ? 27 : 60) + static_cast<std::size_t>(m) * (binary ? 41 : 40));
+  out += "ply\nformat ";
+  out += binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
+  out += "comment written by confluent\n";
+  if (!mesh.texture_path.empty())
+    out += "comment TextureFile " + RelativeOrAbsolute(mesh.texture_path, fs::path(path).parent_path()) + "\n";
+  out += "element vertex " + std::to_string(n) + "\n";
+  const char* coordinate_type = doubles ? "double" : "float";
+  for (const char* axis : {"x", "y", "z"}) out += std::string("property ") + coordinate_type + " " + axis + "\n";
+  if (colors) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  out += "element face " + std::to_string(m) + "\nproperty list uchar int vertex_indices\n";
+  if (labels) out += "property int label\n";
+  if (uvs) out += "property list uchar float texcoord\n";
+  out += "end_header\n";
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const double value = mesh.vertices(i, k);
+      if (binary) {
+        if (doubles) AppendBinary(&out, value);
+        else AppendBinary(&out, static_cast<float>(value));
+      } else {
+        if (k > 0) out += ' ';
+        if (doubles) AppendNumber(&out, value);
+        else AppendNumber(&out, static_cast<float>(value));
+      }
+    }
+    if (colors)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint8_t byte = ColorByte(mesh.colors(i, k));
+        if (binary) {
+          AppendBinary(&out, byte);
+        } else {
+          out += ' ';
+          AppendInt(&out, byte);
+        }
+      }
+    if (!binary) out += '\n';
+  }
+  for (int f = 0; f < m; ++f) {
+    if (binary) {
+      AppendBinary(&out, std::uint8_t{3});
+      for (int k = 0; k < 3; ++k) AppendBinary(&out, static_cast<std::int32_t>(mesh.faces(f, k)));
+      if (labels) AppendBinary(&out, static_cast<std::int32_t>(mesh.face_labels[f]));
+      if (uvs) {
+        AppendBinary(&out, std::uint8_t{6});
+        for (int k = 0; k < 3; ++k)
+          for (int c = 0; c < 2; ++c) AppendBinary(&out, static_cast<float>(mesh.uvs(mesh.face_uvs(f, k), c)));
+      }
+    } else {
+      out += '3';
+      for (int k = 0; k < 3; ++k) {
+        out += ' ';
+        AppendInt(&out, mesh.faces(f, k));
+      }
+      if (labels) {
+        out += ' ';
+        AppendInt(&out, mesh.face_labels[f]);
+      }
+      if (uvs) {
+        out += " 6";
+        for (int k = 0; k < 3; ++k)
+          for (int c = 0; c < 2; ++c) {
+            out += ' ';
+            AppendNumber(&out, static_cast<float>(mesh.uvs(mesh.face_uvs(f, k), c)));
+          }
+      }
+      out += '\n';
+    }
+  }
+  WriteAtomically(path, [&](const std::string& temporary) { WriteBytes(temporary, out); });
+}
+
+}  // namespace
+
+Mesh ReadMesh(const std::string& path) {
+  const std::string extension = LowerExtension(path);
+  if (extension != ".obj" && extension != ".ply")
+    throw InputError(path, "unknown mesh file extension '" + extension + "' (expected .obj or .ply)");
+  try {
+    return extension == ".obj" ? ReadObj(path) : ReadPly(path);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& failure) {
+    // Internal parse problems (bad list lengths, allocation failures) still name the file.
+    throw InputError(path, failure.what());
+  }
+}
+
+void WriteMesh(const std::string& path, const Mesh& mesh, const MeshWriteOptions& options) {
+  const std::string extension = LowerExtension(path);
+  if (extension != ".obj" && extension != ".ply")
+    throw OutputError(path, "unknown mesh file extension '" + extension + "' (expected .obj or .ply)");
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (mesh.faces(f, k) < 0 || mesh.faces(f, k) >= mesh.num_vertices())
+        throw OutputError(path, "face " + std::to_string(f) + " has an out-of-range vertex index");
+  if (mesh.has_uvs())
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k)
+        if (mesh.face_uvs(f, k) < 0 || mesh.face_uvs(f, k) >= mesh.uvs.rows())
+          throw OutputError(path, "face " + std::to_string(f) + " has an out-of-range uv index");
+  if (extension == ".obj") WriteObj(path, mesh, options);
+  else WritePly(path, mesh, options);
+}
+
+}  // namespace confluent

@@ -1,0 +1,49 @@
+#pragma once
+// Sparse Cholesky factorisation (CHOLMOD, supernodal) that is computed once and then solves many
+// right-hand sides. CHOLMOD types stay in the .cc.
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+#include <string>
+
+namespace confluent {
+
+// Outcome of SparseCholesky::Factor.
+enum class CholeskyStatus {
+  kOk,
+  kNotSquare,             // the matrix is not square
+  kNotPositiveDefinite,   // a non-positive pivot was met (singular or indefinite matrix)
+  kNumericalFailure,      // CHOLMOD failed otherwise (out of memory, non-finite entries)
+};
+
+// Factors a symmetric positive definite sparse matrix A = L L^T once (fill-reducing ordering,
+// supernodal) and solves A X = B for dense B with many columns. Only the lower triangle of A
+// is read. Solve() reuses workspace, so one object must not be used from two threads at once.
+class SparseCholesky {
+ public:
+  SparseCholesky();
+  ~SparseCholesky();
+  SparseCholesky(SparseCholesky&&) noexcept;
+  SparseCholesky& operator=(SparseCholesky&&) noexcept;
+  SparseCholesky(const SparseCholesky&) = delete;
+  SparseCholesky& operator=(const SparseCholesky&) = delete;
+
+  // Analyses and factors `matrix` (n x n). Returns kOk on success; otherwise the object holds no
+  // factor and message() says why (e.g. "not positive definite: pivot 17 of 100").
+  CholeskyStatus Factor(const Eigen::SparseMatrix<double>& matrix);
+
+  // Solves A X = B for B of size n x k (any k >= 1). Aborts if no factor is held.
+  Eigen::MatrixXd Solve(const Eigen::MatrixXd& rhs) const;
+
+  bool is_factored() const;
+  int rows() const;                   // n, or 0 without a factor
+  double factor_nonzeros() const;     // entries in L (fill-in measure), 0 without a factor
+  const std::string& message() const;  // why the last Factor() failed; empty on success
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace confluent

@@ -1,0 +1,559 @@
+#include "deform/confluent_motion.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <Eigen/SparseCore>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <map>
+#include <stdexcept>
+
+#include "core/error.h"
+#include "deform/cholmod_solver.h"
+
+namespace confluent {
+
+void ConfluentMotionOptions::Check() const {
+  laplacian.Check();
+  if (!(singular_w >= 0.0 && singular_w < 1.0) || max_segment_fields < 1 || !(segment_rigid_tolerance_rad >= 0.0))
+    std::abort();
+}
+
+namespace {
+
+using RowMatrixX4d = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
+using Weights = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+Eigen::Vector4d ToVector(const Eigen::Quaterniond& q) { return Eigen::Vector4d(q.w(), q.x(), q.y(), q.z()); }
+Eigen::Quaterniond ToQuaternion(const Eigen::Vector4d& v) { return Eigen::Quaterniond(v(0), v(1), v(2), v(3)); }
+
+// Rotation that best maps triangle `from` onto triangle `to` (Kabsch: the rotation part of the
+// polar decomposition of the cross-covariance of centred corners plus the scaled normal).
+// Returns false (and the identity) for a degenerate triangle.
+bool TriangleRotation(const Eigen::Matrix3d& from, const Eigen::Matrix3d& to, Eigen::Quaterniond* rotation) {
+  // Rows are corners.
+  const Eigen::RowVector3d from_centre = from.colwise().mean(), to_centre = to.colwise().mean();
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  for (int k = 0; k < 3; ++k) h += (from.row(k) - from_centre).transpose() * (to.row(k) - to_centre);
+  const Eigen::Vector3d from_normal = (from.row(1) - from.row(0)).cross(from.row(2) - from.row(0)).transpose();
+  const Eigen::Vector3d to_normal = (to.row(1) - to.row(0)).cross(to.row(2) - to.row(0)).transpose();
+  const double from_area = from_normal.norm(), to_area = to_normal.norm();
+  const double scale = std::max((from.row(1) - from.row(0)).squaredNorm(), (from.row(2) - from.row(0)).squaredNorm());
+  if (!(from_area > 1e-12 * scale) || !(to_area > 1e-12 * scale) || !h.allFinite()) {
+    *rotation = Eigen::Quaterniond::Identity();
+    return false;
+  }
+  // Normals scaled to edge-length units.
+  h += (from_normal / std::sqrt(from_area)) * (to_normal / std::sqrt(to_area)).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  const Eigen::Matrix3d r = svd.matrixV() * d * svd.matrixU().transpose();
+  *rotation = Eigen::Quaterniond(r);
+  rotation->normalize();
+  return true;
+}
+
+Eigen::Matrix3d Corners(const RowMatrixX3d& vertices, const RowMatrixX3i& faces, int f) {
+  Eigen::Matrix3d corners;
+  for (int k = 0; k < 3; ++k) corners.row(k) = vertices.row(faces(f, k));
+  return corners;
+}
+
+}  // namespace
+
+struct ConfluentMotion::Impl {
+  ConfluentMotionOptions options;
+  ConfluentMotionSetupSummary setup;
+  // Scan.
+  RowMatrixX3d scan_vertices;
+  RowMatrixX3i scan_faces;
+  Weights weights;                      // half cotangents per face corner
+  std::vector<int> component_of_vertex, component_of_face;
+  int num_components = 0;
+  std::vector<int> unreferenced;        // vertices used by no face
+  // Template.
+  RowMatrixX3d template_reference;
+  RowMatrixX3i template_faces;
+  // Pairs.
+  std::vector<CorrespondencePair> pairs;
+  std::vector<Eigen::Vector3d> scan_centroid_ref, template_centroid_ref;
+  std::vector<int> align_order, align_parent;  // spanning tree over pairs for sign alignment
+  // Harmonic system.
+  std::vector<int> constrained, free_vertices;  // scan vertex ids
+  Eigen::SparseMatrix<double> average;     // n_c x m: Dirichlet value of each constrained vertex
+  Eigen::SparseMatrix<double> harmonic_rhs;  // n_f x m: -L_fc * average
+  SparseCholesky harmonic;
+  // Segment weight fields (n x s), when all pairs are labelled.
+  std::vector<int> segment_of_pair;
+  int num_segments = 0;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> segment_fields;
+  // Poisson system.
+  SparseCholesky poisson;
+  // Frame state.
+  int frame = 0;
+  bool has_previous = false;
+  RowMatrixX3d previous_template;
+  RowMatrixX4d previous_face_rotations;  // from the scan's reference pose
+  std::vector<Eigen::Vector4d> previous_constraints;  // aligned, relative to the active reference
+  std::vector<Eigen::Vector4d> previous_full;  // aligned, relative to the reference pose
+  int previous_reference = -2;             // active reference of the previous frame
+  // Intermediate reference (report section 4.3).
+  int intermediate_frame = -1;
+  RowMatrixX3d intermediate_template;
+  RowMatrixX4d intermediate_face_rotations;
+  RowMatrixX4d face_rotations;
+
+  std::vector<Eigen::Quaterniond> ConstraintRotations(const RowMatrixX3d& from, const RowMatrixX3d& to,
+                                                      std::vector<int>* degenerate) const {
+    std::vector<Eigen::Quaterniond> result(pairs.size());
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      const int t = pairs[k].template_triangle;
+      if (!TriangleRotation(Corners(from, template_faces, t), Corners(to, template_faces, t), &result[k]) && degenerate)
+        degenerate->push_back(static_cast<int>(k));
+    }
+    return result;
+  }
+};
+
+ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_reference,
+                                 const Correspondences& correspondences, const ConfluentMotionOptions& options,
+                                 const std::string& scan_source, const std::string& correspondences_source)
+    : impl_(std::make_unique<Impl>()) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  Impl& s = *impl_;
+  s.options = options;
+  if (scan.num_faces() == 0) throw InputError(scan_source, "the scan has no faces");
+  if (template_reference.num_faces() == 0) throw InputError("template", "the template has no faces");
+  if (!scan.vertices.allFinite()) throw InputError(scan_source, "the scan has non-finite vertex coordinates");
+  if (!template_reference.vertices.allFinite())
+    throw InputError("template", "the template has non-finite vertex coordinates");
+  ValidateCorrespondences(correspondences, template_reference.num_faces(), scan.num_faces(), correspondences_source);
+  s.scan_vertices = scan.vertices;
+  s.scan_faces = scan.faces;
+  s.template_reference = template_reference.vertices;
+  s.template_faces = template_reference.faces;
+  s.pairs = correspondences.pairs;
+  const int n = scan.num_vertices(), m = static_cast<int>(s.pairs.size());
+  s.setup.num_scan_vertices = n;
+  s.setup.num_scan_faces = scan.num_faces();
+  s.setup.num_pairs = m;
+
+  // Degenerate template triangles cannot carry a rotation.
+  for (int k = 0; k < m; ++k) {
+    Eigen::Quaterniond q;
+    const Eigen::Matrix3d corners = Corners(s.template_reference, s.template_faces, s.pairs[k].template_triangle);
+    if (!TriangleRotation(corners, corners, &q))
+      throw InputError(correspondences_source, "pair " + std::to_string(k) + " (template_triangle " +
+                                                   std::to_string(s.pairs[k].template_triangle) +
+                                                   "): the template triangle has zero area");
+  }
+
+  // Scan topology: components, unreferenced vertices, degenerate and non-manifold faces (warnings).
+  s.num_components = FaceComponents(n, s.scan_faces, &s.component_of_vertex, &s.component_of_face);
+  s.setup.num_components = s.num_components;
+  for (int v = 0; v < n; ++v)
+    if (s.component_of_vertex[v] < 0) s.unreferenced.push_back(v);
+  if (!s.unreferenced.empty())
+    s.setup.warnings.push_back(std::to_string(s.unreferenced.size()) +
+                               " scan vertices belong to no face; they follow the mean translation");
+  {
+    int degenerate = 0;
+    std::map<std::pair<int, int>, int> edge_count;
+    for (int f = 0; f < scan.num_faces(); ++f) {
+      const Eigen::Vector3d a = s.scan_vertices.row(s.scan_faces(f, 0)), b = s.scan_vertices.row(s.scan_faces(f, 1)),
+                            c = s.scan_vertices.row(s.scan_faces(f, 2));
+      const double scale = std::max({(b - a).squaredNorm(), (c - a).squaredNorm(), (c - b).squaredNorm()});
+      if (!((b - a).cross(c - a).norm() > 1e-12 * scale)) ++degenerate;
+      for (int k = 0; k < 3; ++k) {
+        int i = s.scan_faces(f, k), j = s.scan_faces(f, (k + 1) % 3);
+        if (i > j) std::swap(i, j);
+        ++edge_count[{i, j}];
+      }
+    }
+    int non_manifold = 0;
+    for (const auto& [edge, count] : edge_count) non_manifold += count > 2;
+    if (degenerate > 0)
+      s.setup.warnings.push_back(std::to_string(degenerate) +
+                                 " scan faces have (near) zero area; their weights are mollified");
+    if (non_manifold > 0)
+      s.setup.warnings.push_back(std::to_string(non_manifold) +
+                                 " scan edges are shared by more than two faces (non-manifold)");
+  }
+  std::vector<int> pairs_in_component(s.num_components, 0);
+  for (const CorrespondencePair& pair : s.pairs) ++pairs_in_component[s.component_of_face[pair.scan_triangle]];
+  for (int c = 0; c < s.num_components; ++c)
+    if (pairs_in_component[c] == 0) {
+      int faces = 0, first = -1;
+      for (int f = 0; f < scan.num_faces(); ++f)
+        if (s.component_of_face[f] == c) {
+          if (first < 0) first = f;
+          ++faces;
+        }
+      const Eigen::Vector3d p = s.scan_vertices.row(s.scan_faces(first, 0));
+      char where[96];
+      std::snprintf(where, sizeof(where), "(%.3f, %.3f, %.3f)", p.x(), p.y(), p.z());
+      throw InputError(scan_source, "connected component " + std::to_string(c) + " (" + std::to_string(faces) +
+                                        " faces, first face " + std::to_string(first) + " near " + where +
+                                        ") has no correspondence triangle; every part of the scan needs one");
+    }
+
+  // Pair geometry and the sign-alignment spanning tree (Prim over scan centroid distances).
+  for (const CorrespondencePair& pair : s.pairs) {
+    s.scan_centroid_ref.push_back(Corners(s.scan_vertices, s.scan_faces, pair.scan_triangle).colwise().mean().transpose());
+    s.template_centroid_ref.push_back(
+        Corners(s.template_reference, s.template_faces, pair.template_triangle).colwise().mean().transpose());
+  }
+  {
+    std::vector<double> best(m, std::numeric_limits<double>::infinity());
+    std::vector<int> parent(m, -1);
+    std::vector<char> done(m, 0);
+    best[0] = 0.0;
+    for (int step = 0; step < m; ++step) {
+      int next = -1;
+      for (int k = 0; k < m; ++k)
+        if (!done[k] && (next < 0 || best[k] < best[next])) next = k;
+      done[next] = 1;
+      s.align_order.push_back(next);
+      for (int k = 0; k < m; ++k) {
+        if (done[k]) continue;
+        const double d = (s.scan_centroid_ref[k] - s.scan_centroid_ref[next]).squaredNorm();
+        if (d < best[k]) {
+          best[k] = d;
+          parent[k] = next;
+        }
+      }
+    }
+    s.align_parent = parent;
+  }
+
+  // Laplacian; vertices used by no face get a unit diagonal so both systems stay definite.
+  s.weights = CotangentWeights(s.scan_vertices, s.scan_faces, options.laplacian);
+  Eigen::SparseMatrix<double> laplacian = AssembleLaplacian(n, s.scan_faces, s.weights);
+  {
+    std::vector<Eigen::Triplet<double>> diagonal;
+    for (int v : s.unreferenced) diagonal.emplace_back(v, v, 1.0);
+    Eigen::SparseMatrix<double> extra(n, n);
+    extra.setFromTriplets(diagonal.begin(), diagonal.end());
+    laplacian += extra;
+  }
+
+  // Harmonic system: Dirichlet values at the correspondence triangles' vertices.
+  std::vector<int> constrained_index(n, -1);
+  {
+    std::vector<Eigen::Triplet<double>> entries;
+    std::vector<double> weight_sum;
+    for (int k = 0; k < m; ++k)
+      for (int c = 0; c < 3; ++c) {
+        const int v = s.scan_faces(s.pairs[k].scan_triangle, c);
+        if (constrained_index[v] < 0) {
+          constrained_index[v] = static_cast<int>(s.constrained.size());
+          s.constrained.push_back(v);
+          weight_sum.push_back(0.0);
+        }
+        entries.emplace_back(constrained_index[v], k, s.pairs[k].weight);
+        weight_sum[constrained_index[v]] += s.pairs[k].weight;
+      }
+    for (auto& entry : entries) entry = Eigen::Triplet<double>(entry.row(), entry.col(), entry.value() / weight_sum[entry.row()]);
+    s.average.resize(static_cast<int>(s.constrained.size()), m);
+    s.average.setFromTriplets(entries.begin(), entries.end());
+  }
+  s.setup.num_constrained_vertices = static_cast<int>(s.constrained.size());
+  std::vector<int> free_index(n, -1);
+  for (int v = 0; v < n; ++v)
+    if (constrained_index[v] < 0) {
+      free_index[v] = static_cast<int>(s.free_vertices.size());
+      s.free_vertices.push_back(v);
+    }
+  const int num_free = static_cast<int>(s.free_vertices.size());
+  const int num_constrained = static_cast<int>(s.constrained.size());
+  {
+    std::vector<Eigen::Triplet<double>> ff, fc;
+    for (int col = 0; col < laplacian.outerSize(); ++col)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(laplacian, col); it; ++it) {
+        const int row = static_cast<int>(it.row());
+        if (free_index[row] < 0) continue;
+        if (free_index[col] >= 0)
+          ff.emplace_back(free_index[row], free_index[col], it.value());
+        else
+          fc.emplace_back(free_index[row], constrained_index[col], -it.value());
+      }
+    Eigen::SparseMatrix<double> l_ff(num_free, num_free), minus_l_fc(num_free, num_constrained);
+    l_ff.setFromTriplets(ff.begin(), ff.end());
+    minus_l_fc.setFromTriplets(fc.begin(), fc.end());
+    s.harmonic_rhs = minus_l_fc * s.average;
+    if (num_free > 0 && s.harmonic.Factor(l_ff) != CholeskyStatus::kOk)
+      throw InputError(scan_source, "the harmonic interpolation system cannot be factored: " + s.harmonic.message());
+    s.setup.harmonic_factor_nonzeros = s.harmonic.factor_nonzeros();
+  }
+
+  // Segment weight fields: the harmonic field is linear in the per-segment quaternions.
+  if (options.segment_fields) {
+    std::map<std::string, int> segment_id;
+    bool all_labelled = true;
+    for (const CorrespondencePair& pair : s.pairs) {
+      if (pair.segment.empty()) all_labelled = false;
+      segment_id.emplace(pair.segment, static_cast<int>(segment_id.size()));
+    }
+    if (all_labelled && static_cast<int>(segment_id.size()) <= options.max_segment_fields) {
+      s.num_segments = static_cast<int>(segment_id.size());
+      Eigen::SparseMatrix<double> indicator(m, s.num_segments);
+      std::vector<Eigen::Triplet<double>> entries;
+      for (int k = 0; k < m; ++k) {
+        s.segment_of_pair.push_back(segment_id.at(s.pairs[k].segment));
+        entries.emplace_back(k, s.segment_of_pair.back(), 1.0);
+      }
+      indicator.setFromTriplets(entries.begin(), entries.end());
+      s.segment_fields.resize(n, s.num_segments);
+      s.segment_fields.setZero();
+      const Eigen::MatrixXd at_constrained = Eigen::MatrixXd(s.average * indicator);
+      for (int i = 0; i < num_constrained; ++i) s.segment_fields.row(s.constrained[i]) = at_constrained.row(i);
+      if (num_free > 0) {
+        const Eigen::MatrixXd at_free = s.harmonic.Solve(Eigen::MatrixXd(s.harmonic_rhs * indicator));
+        for (int i = 0; i < num_free; ++i) s.segment_fields.row(s.free_vertices[i]) = at_free.row(i);
+      }
+      s.setup.num_segment_fields = s.num_segments;
+    }
+  }
+
+  // Poisson system: L with one vertex per component pinned (the right-hand side sums to zero
+  // over each component, so the pin only fixes the translation gauge).
+  {
+    std::vector<int> pinned(s.num_components, -1);
+    for (int v = 0; v < n; ++v) {
+      const int c = s.component_of_vertex[v];
+      if (c >= 0 && pinned[c] < 0) pinned[c] = v;
+    }
+    const double mean_diagonal = laplacian.diagonal().mean();
+    std::vector<Eigen::Triplet<double>> pins;
+    for (int v : pinned) pins.emplace_back(v, v, mean_diagonal);
+    Eigen::SparseMatrix<double> pin(n, n);
+    pin.setFromTriplets(pins.begin(), pins.end());
+    if (s.poisson.Factor(laplacian + pin) != CholeskyStatus::kOk)
+      throw InputError(scan_source, "the Poisson system cannot be factored: " + s.poisson.message());
+    s.setup.poisson_factor_nonzeros = s.poisson.factor_nonzeros();
+  }
+  s.setup.factor_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+ConfluentMotion::~ConfluentMotion() = default;
+ConfluentMotion::ConfluentMotion(ConfluentMotion&&) noexcept = default;
+ConfluentMotion& ConfluentMotion::operator=(ConfluentMotion&&) noexcept = default;
+
+const ConfluentMotionSetupSummary& ConfluentMotion::setup_summary() const { return impl_->setup; }
+const Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>& ConfluentMotion::face_rotations() const {
+  return impl_->face_rotations;
+}
+
+void ConfluentMotion::Reset() {
+  Impl& s = *impl_;
+  s.has_previous = false;
+  s.previous_constraints.clear();
+  s.previous_full.clear();
+  s.previous_reference = -2;
+  s.intermediate_frame = -1;
+}
+
+RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, DeformSummary* summary_out) {
+  Impl& s = *impl_;
+  if (template_vertices.rows() != s.template_reference.rows())
+    throw std::invalid_argument("template frame has " + std::to_string(template_vertices.rows()) +
+                                " vertices, the reference has " + std::to_string(s.template_reference.rows()));
+  if (!template_vertices.allFinite()) throw std::invalid_argument("template frame has non-finite coordinates");
+  DeformSummary summary;
+  summary.frame = s.frame;
+  const int m = static_cast<int>(s.pairs.size());
+  const int n = static_cast<int>(s.scan_vertices.rows());
+  const int num_faces = static_cast<int>(s.scan_faces.rows());
+
+  // 1. Constraint rotations from the reference pose, signs kept consistent: with the previous
+  // frame when there is one (so w changes continuously and goes negative past 180 degrees),
+  // else along a spanning tree of neighbouring pairs from a root in the w >= 0 hemisphere.
+  std::vector<int> degenerate;
+  const std::vector<Eigen::Quaterniond> full = s.ConstraintRotations(s.template_reference, template_vertices, &degenerate);
+  auto align = [&](const std::vector<Eigen::Quaterniond>& rotations, const std::vector<Eigen::Vector4d>* previous) {
+    std::vector<Eigen::Vector4d> q(m);
+    for (int k = 0; k < m; ++k) q[k] = ToVector(rotations[k]);
+    if (previous != nullptr) {
+      for (int k : degenerate) q[k] = (*previous)[k];
+      for (int k = 0; k < m; ++k)
+        if (q[k].dot((*previous)[k]) < 0.0) q[k] = -q[k];
+    } else {
+      for (int k : s.align_order) {
+        const int parent = s.align_parent[k];
+        if (parent < 0 ? q[k](0) < 0.0 : q[k].dot(q[parent]) < 0.0) q[k] = -q[k];
+      }
+    }
+    return q;
+  };
+  const bool has_history = s.has_previous && static_cast<int>(s.previous_full.size()) == m;
+  const std::vector<Eigen::Vector4d> full_q = align(full, has_history ? &s.previous_full : nullptr);
+  if (!degenerate.empty())
+    summary.warnings.push_back(std::to_string(degenerate.size()) +
+                               " template correspondence triangles are degenerate in this frame");
+  // Singularity check (report section 4.3): |w| small means a rotation near 180 degrees; with
+  // continuous signs, w < singular_w also catches rotations beyond it.
+  double min_w = 1.0;
+  summary.min_abs_w = 1.0;
+  for (const Eigen::Vector4d& q : full_q) {
+    min_w = std::min(min_w, q(0));
+    summary.min_abs_w = std::min(summary.min_abs_w, std::abs(q(0)));
+  }
+  summary.singular = min_w < s.options.singular_w;
+
+  // 2. Choose the reference: the reference pose, or an intermediate one (an earlier frame).
+  int reference = -1;
+  if (summary.singular && s.options.intermediate_reference) {
+    bool keep = false;
+    if (s.intermediate_frame >= 0) {
+      double min_relative_w = 1.0;
+      for (const auto& q : s.ConstraintRotations(s.intermediate_template, template_vertices, nullptr))
+        min_relative_w = std::min(min_relative_w, std::abs(q.w()));
+      keep = min_relative_w >= s.options.singular_w;
+    }
+    if (!keep && s.has_previous) {
+      s.intermediate_frame = s.frame - 1;
+      s.intermediate_template = s.previous_template;
+      s.intermediate_face_rotations = s.previous_face_rotations;
+      keep = true;
+    }
+    if (keep)
+      reference = s.intermediate_frame;
+    else
+      summary.warnings.push_back("constraint rotation near 180 degrees (w = " + std::to_string(min_w) +
+                                 ") and no earlier frame to use as an intermediate reference");
+  } else if (!summary.singular) {
+    s.intermediate_frame = -1;
+  }
+  summary.reference_frame = reference;
+  std::vector<Eigen::Vector4d> q;
+  if (reference < 0) {
+    q = full_q;
+  } else {
+    degenerate.clear();
+    const auto relative = s.ConstraintRotations(s.intermediate_template, template_vertices, &degenerate);
+    const bool same = s.previous_reference == reference && static_cast<int>(s.previous_constraints.size()) == m;
+    q = align(relative, same ? &s.previous_constraints : nullptr);
+  }
+
+  // 4. Harmonic interpolation of the 4 components (Dirichlet values at the constrained vertices).
+  RowMatrixX4d vertex_q(n, 4);
+  bool use_fields = s.num_segments > 0;
+  Eigen::Matrix<double, Eigen::Dynamic, 4> segment_q;
+  if (use_fields) {
+    segment_q.setZero(s.num_segments, 4);
+    for (int k = 0; k < m; ++k) segment_q.row(s.segment_of_pair[k]) += s.pairs[k].weight * q[k].transpose();
+    for (int g = 0; g < s.num_segments; ++g) segment_q.row(g).normalize();
+    const double min_dot = std::cos(0.5 * s.options.segment_rigid_tolerance_rad);
+    for (int k = 0; k < m && use_fields; ++k)
+      if (segment_q.row(s.segment_of_pair[k]).dot(q[k].transpose()) < min_dot - 1e-12) use_fields = false;
+  }
+  summary.used_segment_fields = use_fields;
+  if (use_fields) {
+    vertex_q.noalias() = s.segment_fields * segment_q;
+  } else {
+    Eigen::MatrixXd constraint_q(m, 4);
+    for (int k = 0; k < m; ++k) constraint_q.row(k) = q[k].transpose();
+    const Eigen::MatrixXd at_constrained = s.average * constraint_q;
+    for (std::size_t i = 0; i < s.constrained.size(); ++i) vertex_q.row(s.constrained[i]) = at_constrained.row(i);
+    if (!s.free_vertices.empty()) {
+      const Eigen::MatrixXd at_free = s.harmonic.Solve(Eigen::MatrixXd(s.harmonic_rhs * constraint_q));
+      for (std::size_t i = 0; i < s.free_vertices.size(); ++i) vertex_q.row(s.free_vertices[i]) = at_free.row(i);
+    }
+  }
+
+  // 5. Per-face rotation: normalised average of the corner quaternions (composed with the
+  // intermediate reference's rotation), then the right-hand side U_reduced: the cotangent
+  // Laplacian of the fragmented mesh of rotated reference triangles, summed per vertex.
+  RowMatrixX4d face_q(num_faces, 4);
+  Eigen::Matrix<double, Eigen::Dynamic, 3> rhs = Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(n, 3);
+  int vanishing = 0;
+  for (int f = 0; f < num_faces; ++f) {
+    Eigen::Vector4d sum = (vertex_q.row(s.scan_faces(f, 0)) + vertex_q.row(s.scan_faces(f, 1)) +
+                           vertex_q.row(s.scan_faces(f, 2))).transpose();
+    const double norm = sum.norm();
+    Eigen::Quaterniond rotation;
+    if (norm > 1e-9 && std::isfinite(norm)) {
+      rotation = ToQuaternion(sum / norm);
+    } else {
+      ++vanishing;
+      rotation = Eigen::Quaterniond::Identity();
+    }
+    if (reference >= 0) rotation = rotation * ToQuaternion(s.intermediate_face_rotations.row(f).transpose());
+    if (!(norm > 1e-9 && std::isfinite(norm)) && s.has_previous)
+      rotation = ToQuaternion(s.previous_face_rotations.row(f).transpose());
+    rotation.normalize();
+    face_q.row(f) = ToVector(rotation).transpose();
+    const Eigen::Matrix3d r = rotation.toRotationMatrix();
+    for (int k = 0; k < 3; ++k) {
+      const int i = s.scan_faces(f, (k + 1) % 3), j = s.scan_faces(f, (k + 2) % 3);
+      const Eigen::Vector3d edge = r * (s.scan_vertices.row(i) - s.scan_vertices.row(j)).transpose();
+      const Eigen::Vector3d flux = s.weights(f, k) * edge;
+      rhs.row(i) += flux.transpose();
+      rhs.row(j) -= flux.transpose();
+    }
+  }
+  if (vanishing > 0)
+    summary.warnings.push_back(std::to_string(vanishing) +
+                               " faces got a vanishing interpolated quaternion (kept their previous rotation)");
+  for (int v : s.unreferenced) rhs.row(v).setZero();
+
+  // 6. Solve L x = U_reduced with the factor computed once.
+  const Eigen::MatrixXd solved = s.poisson.Solve(Eigen::MatrixXd(rhs));
+  RowMatrixX3d result = solved;
+
+  // 7. Global position: per component, the translation that best places the correspondence
+  // centroids where the template's triangles carry them (the scan-template offset rotates with
+  // the template triangle).
+  std::vector<Eigen::Vector3d> shift(s.num_components, Eigen::Vector3d::Zero());
+  std::vector<double> weight(s.num_components, 0.0);
+  std::vector<Eigen::Vector3d> target(m);
+  Eigen::Vector3d mean_offset = Eigen::Vector3d::Zero();
+  for (int k = 0; k < m; ++k) {
+    const Eigen::Vector3d template_now =
+        Corners(template_vertices, s.template_faces, s.pairs[k].template_triangle).colwise().mean().transpose();
+    target[k] = template_now + full[k] * (s.scan_centroid_ref[k] - s.template_centroid_ref[k]);
+    const Eigen::Vector3d scan_now = Corners(result, s.scan_faces, s.pairs[k].scan_triangle).colwise().mean().transpose();
+    const int c = s.component_of_face[s.pairs[k].scan_triangle];
+    shift[c] += s.pairs[k].weight * (target[k] - scan_now);
+    weight[c] += s.pairs[k].weight;
+    mean_offset += (target[k] - s.scan_centroid_ref[k]) / m;
+  }
+  for (int c = 0; c < s.num_components; ++c) shift[c] /= weight[c];
+  for (int v = 0; v < n; ++v) {
+    const int c = s.component_of_vertex[v];
+    if (c >= 0)
+      result.row(v) += shift[c].transpose();
+    else
+      result.row(v) = s.scan_vertices.row(v) + mean_offset.transpose();
+  }
+  double squared = 0.0;
+  for (int k = 0; k < m; ++k) {
+    const Eigen::Vector3d scan_now = Corners(result, s.scan_faces, s.pairs[k].scan_triangle).colwise().mean().transpose();
+    squared += (target[k] - scan_now).squaredNorm();
+  }
+  summary.placement_rms_m = std::sqrt(squared / m);
+  if (!result.allFinite()) {  // cannot happen with finite input; never hand out NaN
+    summary.warnings.push_back("non-finite result replaced by the reference pose");
+    for (int v = 0; v < n; ++v)
+      if (!result.row(v).allFinite()) result.row(v) = s.scan_vertices.row(v);
+  }
+
+  // 8. State for the next frame.
+  s.has_previous = true;
+  s.previous_template = template_vertices;
+  s.previous_face_rotations = face_q;
+  s.previous_constraints = q;
+  s.previous_full = full_q;
+  s.previous_reference = reference;
+  s.face_rotations = face_q;
+  ++s.frame;
+  if (summary_out) *summary_out = summary;
+  return result;
+}
+
+}  // namespace confluent

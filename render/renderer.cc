@@ -1,0 +1,828 @@
+// MeshRenderer: OpenGL 4.3 core rasterisation of meshes into calibrated cameras.
+
+#include "render/renderer.h"
+
+#include <epoxy/gl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <utility>
+
+#include "core/image_io.h"
+
+namespace confluent {
+namespace {
+
+// Colour attachments of a render target, in this order (= fragment output locations).
+enum Attachment { kColor = 0, kCameraZ = 1, kTriangleId = 2, kMask = 3, kNumAttachments = 4 };
+
+constexpr const char* kMeshVertexShader = R"(#version 430 core
+layout(location = 0) in vec3 position_in_world;
+layout(location = 1) in vec3 normal_in_world;
+layout(location = 2) in vec3 albedo;
+layout(location = 3) in vec2 uv;
+uniform mat4 clip_from_world;
+uniform mat4 cam_from_world;
+out float camera_z;
+out vec3 v_position;
+out vec3 v_normal;
+out vec3 v_albedo;
+out vec2 v_uv;
+void main() {
+  gl_Position = clip_from_world * vec4(position_in_world, 1.0);
+  camera_z = (cam_from_world * vec4(position_in_world, 1.0)).z;
+  v_position = position_in_world;
+  v_normal = normal_in_world;
+  v_albedo = albedo;
+  v_uv = uv;
+}
+)";
+
+constexpr const char* kMeshFragmentShader = R"(
+in float camera_z;
+in vec3 v_position;
+in vec3 v_normal;
+in vec3 v_albedo;
+in vec2 v_uv;
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out float out_camera_z;
+layout(location = 2) out int out_triangle_id;
+layout(location = 3) out float out_mask;
+uniform int id_offset;
+#ifdef WITH_COLOR
+uniform bool use_texture;
+uniform sampler2D albedo_texture;
+uniform bool lit;
+uniform bool headlight;
+uniform vec3 light_direction;
+uniform vec3 camera_center;
+uniform float ambient;
+uniform float diffuse;
+uniform bool srgb_output;
+vec3 EncodeSrgb(vec3 c) {
+  c = clamp(c, 0.0, 1.0);
+  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));
+}
+#endif
+void main() {
+  out_camera_z = camera_z;
+  out_triangle_id = gl_PrimitiveID + id_offset;
+  out_mask = 1.0;
+#ifdef WITH_COLOR
+  vec3 albedo = use_texture ? texture(albedo_texture, vec2(v_uv.x, 1.0 - v_uv.y)).rgb : v_albedo;
+  vec3 color = albedo;
+  if (lit) {
+    vec3 view = normalize(camera_center - v_position);
+    vec3 n = v_normal;
+    float length_n = length(n);
+    n = length_n > 0.0 ? n / length_n : view;
+    if (dot(n, view) < 0.0) n = -n;  // two-sided lighting
+    vec3 l = headlight ? view : light_direction;
+    color = albedo * (ambient + diffuse * max(dot(n, l), 0.0));
+  }
+  out_color = vec4(srgb_output ? EncodeSrgb(color) : clamp(color, 0.0, 1.0), 1.0);
+#else
+  out_color = vec4(0.0);
+#endif
+}
+)";
+
+// Full-screen triangle for the distortion remap.
+constexpr const char* kRemapVertexShader = R"(#version 430 core
+void main() {
+  vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+  gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+)";
+
+// Each output (distorted) pixel reads its ideal pixel from `ideal_from_pixel` (RG32F, ideal
+// buffer coordinates with pixel centres at integers) and samples the ideal buffers.
+constexpr const char* kRemapFragmentShader = R"(#version 430 core
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out float out_camera_z;
+layout(location = 2) out int out_triangle_id;
+layout(location = 3) out float out_mask;
+uniform sampler2D ideal_from_pixel;
+uniform sampler2D ideal_color;
+uniform sampler2D ideal_camera_z;
+uniform isampler2D ideal_triangle_id;
+uniform sampler2D ideal_mask;
+uniform ivec2 ideal_size;     // region of the ideal buffers that was rendered
+uniform vec2 texture_size;    // allocated size of the ideal buffers
+uniform vec4 background;
+void main() {
+  vec2 ideal = texelFetch(ideal_from_pixel, ivec2(gl_FragCoord.xy), 0).xy;
+  ivec2 nearest = ivec2(floor(ideal + 0.5));
+  if (any(lessThan(nearest, ivec2(0))) || any(greaterThanEqual(nearest, ideal_size))) {
+    out_color = background;
+    out_camera_z = 0.0;
+    out_triangle_id = -1;
+    out_mask = 0.0;
+    return;
+  }
+  vec2 clamped = clamp(ideal, vec2(0.0), vec2(ideal_size - 1));
+  out_color = texture(ideal_color, (clamped + 0.5) / texture_size);
+  out_camera_z = texelFetch(ideal_camera_z, nearest, 0).r;
+  out_triangle_id = texelFetch(ideal_triangle_id, nearest, 0).r;
+  out_mask = texelFetch(ideal_mask, nearest, 0).r;
+}
+)";
+
+GLuint CompileShader(GLenum type, const std::string& source) {
+  const GLuint shader = glCreateShader(type);
+  const char* text = source.c_str();
+  glShaderSource(shader, 1, &text, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[4096] = {0};
+    glGetShaderInfoLog(shader, sizeof(log) - 1, nullptr, log);
+    glDeleteShader(shader);
+    throw RenderContextError(std::string("OpenGL: shader compilation failed: ") + log);
+  }
+  return shader;
+}
+
+GLuint LinkProgram(const std::string& vertex, const std::string& fragment) {
+  const GLuint vs = CompileShader(GL_VERTEX_SHADER, vertex);
+  const GLuint fs = CompileShader(GL_FRAGMENT_SHADER, fragment);
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[4096] = {0};
+    glGetProgramInfoLog(program, sizeof(log) - 1, nullptr, log);
+    glDeleteProgram(program);
+    throw RenderContextError(std::string("OpenGL: shader program link failed: ") + log);
+  }
+  return program;
+}
+
+void SetMatrix(GLuint program, const char* name, const Eigen::Matrix4d& matrix) {
+  const Eigen::Matrix4f m = matrix.cast<float>();  // column-major, as GL expects
+  glUniformMatrix4fv(glGetUniformLocation(program, name), 1, GL_FALSE, m.data());
+}
+
+float EncodeSrgb(double linear) {
+  const double c = std::clamp(linear, 0.0, 1.0);
+  return static_cast<float>(c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055);
+}
+
+// Offscreen framebuffer with the four colour attachments (textures) and optionally a depth
+// buffer. Storage only grows; a render uses the lower-left width x height region.
+struct Target {
+  GLuint framebuffer = 0;
+  GLuint textures[kNumAttachments] = {0, 0, 0, 0};
+  GLuint depth_buffer = 0;
+  int width = 0;   // allocated size
+  int height = 0;
+  bool float_color = false;
+  bool with_depth = false;
+
+  void Release() {
+    if (framebuffer) glDeleteFramebuffers(1, &framebuffer);
+    glDeleteTextures(kNumAttachments, textures);
+    if (depth_buffer) glDeleteRenderbuffers(1, &depth_buffer);
+    framebuffer = depth_buffer = 0;
+    for (GLuint& t : textures) t = 0;
+    width = height = 0;
+  }
+
+  // Makes the target at least `w` x `h` with the given colour format, and binds it.
+  void Ensure(int w, int h, bool want_float_color, bool want_depth) {
+    if (framebuffer != 0 && w <= width && h <= height && want_float_color == float_color) {
+      glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+      return;
+    }
+    const int new_width = std::max(w, width), new_height = std::max(h, height);
+    Release();
+    width = new_width;
+    height = new_height;
+    float_color = want_float_color;
+    with_depth = want_depth;
+    glGenFramebuffers(1, &framebuffer);
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+    glGenTextures(kNumAttachments, textures);
+    const GLenum formats[kNumAttachments] = {static_cast<GLenum>(float_color ? GL_RGBA32F : GL_RGBA8), GL_R32F,
+                                             GL_R32I, GL_R8};
+    for (int i = 0; i < kNumAttachments; ++i) {
+      glBindTexture(GL_TEXTURE_2D, textures[i]);
+      glTexStorage2D(GL_TEXTURE_2D, 1, formats[i], width, height);
+      const GLint filter = i == kColor ? GL_LINEAR : GL_NEAREST;
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filter);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, GL_TEXTURE_2D, textures[i], 0);
+    }
+    if (with_depth) {
+      glGenRenderbuffers(1, &depth_buffer);
+      glBindRenderbuffer(GL_RENDERBUFFER, depth_buffer);
+      glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, width, height);
+      glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_buffer);
+    }
+    const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+      std::ostringstream out;
+      out << "OpenGL: offscreen framebuffer " << width << "x" << height << " is incomplete (status 0x" << std::hex
+          << status << ")";
+      throw RenderContextError(out.str());
+    }
+  }
+};
+
+// One uploaded mesh. GL vertices are the distinct (vertex, uv) corners; gl_to_mesh maps them
+// back to mesh vertices so that per-frame updates only gather positions and normals.
+struct GpuMesh {
+  std::string name;
+  GLuint vertex_array = 0;
+  GLuint positions = 0, normals = 0, albedos = 0, uvs = 0, indices = 0;
+  GLuint texture = 0;
+  int num_vertices = 0;       // GL vertices
+  int num_mesh_vertices = 0;  // vertices of the uploaded Mesh
+  int num_faces = 0;
+  int id_offset = 0;
+  bool has_colors = false;
+  RowMatrixX3i faces;            // mesh faces (mesh vertex indices), for normals
+  std::vector<int> gl_to_mesh;   // empty = identity
+  std::vector<float> scratch;    // upload staging
+};
+
+std::string Where(int row, const char* what) {
+  return std::string(what) + " " + std::to_string(row);
+}
+
+// Area-weighted vertex normals (unnormalised; the shader normalises).
+RowMatrixX3d VertexNormals(const RowMatrixX3d& vertices, const RowMatrixX3i& faces) {
+  RowMatrixX3d normals = RowMatrixX3d::Zero(vertices.rows(), 3);
+  for (int f = 0; f < faces.rows(); ++f) {
+    const int a = faces(f, 0), b = faces(f, 1), c = faces(f, 2);
+    const Eigen::Vector3d n =
+        (vertices.row(b) - vertices.row(a)).transpose().cross((vertices.row(c) - vertices.row(a)).transpose());
+    normals.row(a) += n.transpose();
+    normals.row(b) += n.transpose();
+    normals.row(c) += n.transpose();
+  }
+  for (int v = 0; v < normals.rows(); ++v) {
+    const double length = normals.row(v).norm();
+    if (length > 0.0) normals.row(v) /= length;
+  }
+  return normals;
+}
+
+void CheckVertices(const RowMatrixX3d& vertices, const std::string& name) {
+  for (int v = 0; v < vertices.rows(); ++v)
+    if (!vertices.row(v).allFinite()) {
+      std::ostringstream out;
+      out << "vertex " << v << " has a non-finite coordinate (" << vertices(v, 0) << ", " << vertices(v, 1) << ", "
+          << vertices(v, 2) << ")";
+      throw InputError(name, out.str());
+    }
+}
+
+// Distortion remap of one camera: the ideal buffer's placement and the per-pixel map.
+struct DistortionMap {
+  int width = 0, height = 0;
+  Eigen::Matrix3d K;
+  Vector5d dist;
+  int ideal_x0 = 0, ideal_y0 = 0;  // ideal pixel of the ideal buffer's pixel (0, 0)
+  int ideal_width = 0, ideal_height = 0;
+  GLuint texture = 0;  // RG32F, width x height
+  unsigned long long last_used = 0;
+
+  bool Matches(const Camera& camera) const {
+    return camera.width == width && camera.height == height && camera.K == K && camera.dist == dist;
+  }
+};
+
+}  // namespace
+
+void MeshRendererOptions::Check() const {
+  context.Check();
+  if (!(near_m > 0.0) || !(far_m > near_m) || !std::isfinite(far_m))
+    throw UsageError("MeshRendererOptions: need 0 < near_m < far_m < infinity");
+  if (!(max_undistorted_scale >= 1.0) || max_undistorted_scale > 8.0)
+    throw UsageError("MeshRendererOptions::max_undistorted_scale: must be in [1, 8]");
+}
+
+void ShadingOptions::Check() const {
+  if (!light_direction_in_world.allFinite() || light_direction_in_world.norm() == 0.0)
+    throw UsageError("ShadingOptions::light_direction_in_world: must be a finite non-zero vector");
+  if (!std::isfinite(ambient) || !std::isfinite(diffuse) || ambient < 0.0 || diffuse < 0.0)
+    throw UsageError("ShadingOptions: ambient and diffuse must be finite and >= 0");
+  if (!default_albedo.allFinite() || !background.allFinite())
+    throw UsageError("ShadingOptions: default_albedo and background must be finite");
+  if (color_type != PixelType::kUInt8 && color_type != PixelType::kFloat32)
+    throw UsageError("ShadingOptions::color_type: must be kUInt8 or kFloat32");
+}
+
+struct MeshRenderer::Impl {
+  MeshRendererOptions options;
+  EglContext context;
+  GLuint color_program = 0;     // all outputs
+  GLuint geometry_program = 0;  // depth, ids and mask only (no shading work)
+  GLuint remap_program = 0;
+  GLuint empty_vertex_array = 0;
+  Target direct;  // rasterisation target (ideal pinhole)
+  Target remap;   // distortion remap target
+  std::vector<GpuMesh> meshes;
+  std::vector<DistortionMap> maps;
+  unsigned long long clock = 0;
+  int max_size = 0;
+  int total_faces = 0;
+
+  explicit Impl(const MeshRendererOptions& opts) : options(opts), context(opts.context) {
+    color_program = LinkProgram(kMeshVertexShader, std::string("#version 430 core\n#define WITH_COLOR\n") +
+                                                       kMeshFragmentShader);
+    geometry_program = LinkProgram(kMeshVertexShader, std::string("#version 430 core\n") + kMeshFragmentShader);
+    remap_program = LinkProgram(kRemapVertexShader, kRemapFragmentShader);
+    glGenVertexArrays(1, &empty_vertex_array);
+    GLint max_texture = 0, max_viewport[2] = {0, 0}, max_renderbuffer = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
+    glGetIntegerv(GL_MAX_VIEWPORT_DIMS, max_viewport);
+    glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_renderbuffer);
+    max_size = std::min({max_texture, max_viewport[0], max_viewport[1], max_renderbuffer});
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    const GLenum error = glGetError();
+    if (error != GL_NO_ERROR) {
+      std::ostringstream out;
+      out << "OpenGL: renderer setup failed (GL error 0x" << std::hex << error << ")";
+      throw RenderContextError(out.str());
+    }
+  }
+
+  ~Impl() {
+    try {
+      context.MakeCurrent();
+    } catch (...) {
+      return;
+    }
+    for (GpuMesh& mesh : meshes) ReleaseMesh(&mesh);
+    for (DistortionMap& map : maps) glDeleteTextures(1, &map.texture);
+    direct.Release();
+    remap.Release();
+    glDeleteVertexArrays(1, &empty_vertex_array);
+    glDeleteProgram(color_program);
+    glDeleteProgram(geometry_program);
+    glDeleteProgram(remap_program);
+  }
+
+  static void ReleaseMesh(GpuMesh* mesh) {
+    const GLuint buffers[] = {mesh->positions, mesh->normals, mesh->albedos, mesh->uvs, mesh->indices};
+    glDeleteBuffers(5, buffers);
+    glDeleteVertexArrays(1, &mesh->vertex_array);
+    if (mesh->texture) glDeleteTextures(1, &mesh->texture);
+  }
+
+  // Uploads positions and normals of `vertices` (mesh order) into `mesh`'s buffers.
+  void UploadGeometry(GpuMesh* mesh, const RowMatrixX3d& vertices, bool allocate) {
+    const RowMatrixX3d normals = VertexNormals(vertices, mesh->faces);
+    const std::size_t floats = static_cast<std::size_t>(mesh->num_vertices) * 3;
+    for (int pass = 0; pass < 2; ++pass) {
+      const RowMatrixX3d& source = pass == 0 ? vertices : normals;
+      mesh->scratch.resize(floats);
+      for (int i = 0; i < mesh->num_vertices; ++i) {
+        const int v = mesh->gl_to_mesh.empty() ? i : mesh->gl_to_mesh[i];
+        for (int k = 0; k < 3; ++k) mesh->scratch[3 * i + k] = static_cast<float>(source(v, k));
+      }
+      glBindBuffer(GL_ARRAY_BUFFER, pass == 0 ? mesh->positions : mesh->normals);
+      if (allocate)
+        glBufferData(GL_ARRAY_BUFFER, floats * sizeof(float), mesh->scratch.data(), GL_DYNAMIC_DRAW);
+      else
+        glBufferSubData(GL_ARRAY_BUFFER, 0, floats * sizeof(float), mesh->scratch.data());
+    }
+  }
+
+  GLuint UploadTexture(const Image& image, const std::string& name) {
+    if (image.channels < 1 || image.channels > 4) throw InputError(name, "texture must have 1 to 4 channels");
+    if (image.width > max_size || image.height > max_size)
+      throw InputError(name, "texture is larger than the OpenGL limit of " + std::to_string(max_size) + " pixels");
+    const std::size_t n = static_cast<std::size_t>(image.width) * image.height;
+    GLuint texture = 0;
+    glGenTextures(1, &texture);
+    glBindTexture(GL_TEXTURE_2D, texture);
+    const int levels = 1 + static_cast<int>(std::floor(std::log2(std::max(image.width, image.height))));
+    auto channel = [&](std::size_t pixel, int c) -> int {  // which source channel feeds RGBA channel c
+      (void)pixel;
+      if (c == 3) return image.channels == 4 ? 3 : image.channels == 2 ? 1 : -1;
+      return image.channels >= 3 ? c : 0;
+    };
+    if (image.type == PixelType::kFloat32) {
+      std::vector<float> rgba(n * 4, 1.0f);
+      const float* src = image.ptr<float>();
+      for (std::size_t p = 0; p < n; ++p)
+        for (int c = 0; c < 4; ++c) {
+          const int s = channel(p, c);
+          if (s >= 0) rgba[4 * p + c] = src[p * image.channels + s];
+        }
+      glTexStorage2D(GL_TEXTURE_2D, levels, GL_RGBA16F, image.width, image.height);
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, image.width, image.height, GL_RGBA, GL_FLOAT, rgba.data());
+    } else {
+      // 8/16-bit textures are sRGB-encoded: GL decodes them to linear when sampling.
+      std::vector<std::uint8_t> rgba(n * 4, 255);
+      for (std::size_t p = 0; p < n; ++p)
+        for (int c = 0; c < 4; ++c) {
+          const int s = channel(p, c);
+          if (s < 0) continue;
+          const std::size_t i = p * image.channels + s;
+          rgba[4 * p + c] = image.type == PixelType::kUInt8 ? image.ptr<std::uint8_t>()[i]
+                                                            : static_cast<std::uint8_t>(image.ptr<std::uint16_t>()[i] >> 8);
+        }
+      glTexStorage2D(GL_TEXTURE_2D, levels, GL_SRGB8_ALPHA8, image.width, image.height);
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, image.width, image.height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+    }
+    glGenerateMipmap(GL_TEXTURE_2D);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    return texture;
+  }
+
+  int AddMesh(const Mesh& mesh, const std::string& name, const Image& texture_image) {
+    const int n = mesh.num_vertices();
+    CheckVertices(mesh.vertices, name);
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k)
+        if (mesh.faces(f, k) < 0 || mesh.faces(f, k) >= n) {
+          std::ostringstream out;
+          out << "face " << f << " refers to vertex " << mesh.faces(f, k) << ", but the mesh has " << n
+              << " vertices";
+          throw InputError(name, out.str());
+        }
+    if (mesh.colors.rows() != 0 && mesh.colors.rows() != n)
+      throw InputError(name, "has " + std::to_string(mesh.colors.rows()) + " vertex colours for " +
+                                 std::to_string(n) + " vertices");
+    if (mesh.has_colors() && !mesh.colors.allFinite()) throw InputError(name, "vertex colours contain NaN");
+    const bool wants_texture = mesh.has_uvs() && (!texture_image.empty() || !mesh.texture_path.empty());
+    if (wants_texture) {
+      for (int f = 0; f < mesh.num_faces(); ++f)
+        for (int k = 0; k < 3; ++k)
+          if (mesh.face_uvs(f, k) < 0 || mesh.face_uvs(f, k) >= mesh.uvs.rows())
+            throw InputError(name, Where(f, "face") + " has an out-of-range texture coordinate index");
+      if (!mesh.uvs.allFinite()) throw InputError(name, "texture coordinates contain NaN");
+    }
+    context.MakeCurrent();
+
+    GpuMesh gpu;
+    gpu.name = name;
+    gpu.num_faces = mesh.num_faces();
+    gpu.num_mesh_vertices = n;
+    gpu.id_offset = total_faces;
+    gpu.faces = mesh.faces;
+    gpu.has_colors = mesh.has_colors();
+    std::vector<std::uint32_t> indices(static_cast<std::size_t>(gpu.num_faces) * 3);
+    std::vector<float> uv_data;
+    if (wants_texture) {
+      // Split vertices by (vertex, uv) pair.
+      std::map<std::pair<int, int>, int> corner_index;
+      for (int f = 0; f < gpu.num_faces; ++f)
+        for (int k = 0; k < 3; ++k) {
+          const std::pair<int, int> key(mesh.faces(f, k), mesh.face_uvs(f, k));
+          auto [it, inserted] = corner_index.emplace(key, static_cast<int>(gpu.gl_to_mesh.size()));
+          if (inserted) {
+            gpu.gl_to_mesh.push_back(key.first);
+            uv_data.push_back(static_cast<float>(mesh.uvs(key.second, 0)));
+            uv_data.push_back(static_cast<float>(mesh.uvs(key.second, 1)));
+          }
+          indices[3 * f + k] = static_cast<std::uint32_t>(it->second);
+        }
+      gpu.num_vertices = static_cast<int>(gpu.gl_to_mesh.size());
+    } else {
+      for (int f = 0; f < gpu.num_faces; ++f)
+        for (int k = 0; k < 3; ++k) indices[3 * f + k] = static_cast<std::uint32_t>(mesh.faces(f, k));
+      gpu.num_vertices = n;
+    }
+    if (wants_texture) {
+      gpu.texture = UploadTexture(texture_image.empty() ? ReadImage(mesh.texture_path) : texture_image,
+                                  texture_image.empty() ? mesh.texture_path : name + " (texture)");
+    }
+
+    glGenVertexArrays(1, &gpu.vertex_array);
+    glBindVertexArray(gpu.vertex_array);
+    GLuint buffers[5];
+    glGenBuffers(5, buffers);
+    gpu.positions = buffers[0];
+    gpu.normals = buffers[1];
+    gpu.albedos = buffers[2];
+    gpu.uvs = buffers[3];
+    gpu.indices = buffers[4];
+    UploadGeometry(&gpu, mesh.vertices, /*allocate=*/true);
+    glBindBuffer(GL_ARRAY_BUFFER, gpu.positions);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+    glEnableVertexAttribArray(0);
+    glBindBuffer(GL_ARRAY_BUFFER, gpu.normals);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+    glEnableVertexAttribArray(1);
+    if (gpu.has_colors) {
+      std::vector<float> colors(static_cast<std::size_t>(gpu.num_vertices) * 3);
+      for (int i = 0; i < gpu.num_vertices; ++i) {
+        const int v = gpu.gl_to_mesh.empty() ? i : gpu.gl_to_mesh[i];
+        for (int k = 0; k < 3; ++k) colors[3 * i + k] = mesh.colors(v, k);
+      }
+      glBindBuffer(GL_ARRAY_BUFFER, gpu.albedos);
+      glBufferData(GL_ARRAY_BUFFER, colors.size() * sizeof(float), colors.data(), GL_STATIC_DRAW);
+      glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+      glEnableVertexAttribArray(2);
+    }
+    if (gpu.texture) {
+      glBindBuffer(GL_ARRAY_BUFFER, gpu.uvs);
+      glBufferData(GL_ARRAY_BUFFER, uv_data.size() * sizeof(float), uv_data.data(), GL_STATIC_DRAW);
+      glVertexAttribPointer(3, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
+      glEnableVertexAttribArray(3);
+    }
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, gpu.indices);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, indices.size() * sizeof(std::uint32_t), indices.data(), GL_STATIC_DRAW);
+    glBindVertexArray(0);
+    total_faces += gpu.num_faces;
+    meshes.push_back(std::move(gpu));
+    return static_cast<int>(meshes.size()) - 1;
+  }
+
+  const DistortionMap& MapFor(const Camera& camera) {
+    ++clock;
+    for (DistortionMap& map : maps)
+      if (map.Matches(camera)) {
+        map.last_used = clock;
+        return map;
+      }
+    DistortionMap map;
+    map.width = camera.width;
+    map.height = camera.height;
+    map.K = camera.K;
+    map.dist = camera.dist;
+    map.last_used = clock;
+    const int w = camera.width, h = camera.height;
+    std::vector<float> ideal(static_cast<std::size_t>(w) * h * 2);
+    double min_x = 0.0, min_y = 0.0, max_x = w - 1.0, max_y = h - 1.0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const Eigen::Vector2d p = camera.UndistortPixel(Eigen::Vector2d(x, y));
+        float* out = &ideal[2 * (static_cast<std::size_t>(y) * w + x)];
+        if (!p.allFinite()) {
+          out[0] = out[1] = -1e9f;
+          continue;
+        }
+        out[0] = static_cast<float>(p.x());
+        out[1] = static_cast<float>(p.y());
+        min_x = std::min(min_x, p.x());
+        min_y = std::min(min_y, p.y());
+        max_x = std::max(max_x, p.x());
+        max_y = std::max(max_y, p.y());
+      }
+    // The ideal buffer covers every looked-up pixel plus a margin, within the size limit.
+    const double extra = (options.max_undistorted_scale - 1.0) / 2.0;
+    min_x = std::max(min_x, -extra * w);
+    min_y = std::max(min_y, -extra * h);
+    max_x = std::min(max_x, w - 1.0 + extra * w);
+    max_y = std::min(max_y, h - 1.0 + extra * h);
+    map.ideal_x0 = static_cast<int>(std::floor(min_x)) - 2;
+    map.ideal_y0 = static_cast<int>(std::floor(min_y)) - 2;
+    map.ideal_width = std::min(static_cast<int>(std::ceil(max_x)) + 3 - map.ideal_x0, max_size);
+    map.ideal_height = std::min(static_cast<int>(std::ceil(max_y)) + 3 - map.ideal_y0, max_size);
+    for (std::size_t i = 0; i < ideal.size(); i += 2) {
+      ideal[i] -= static_cast<float>(map.ideal_x0);
+      ideal[i + 1] -= static_cast<float>(map.ideal_y0);
+    }
+    glGenTextures(1, &map.texture);
+    glBindTexture(GL_TEXTURE_2D, map.texture);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_RG32F, w, h);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RG, GL_FLOAT, ideal.data());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    constexpr std::size_t kMaxMaps = 16;
+    if (maps.size() >= kMaxMaps) {
+      auto oldest = std::min_element(maps.begin(), maps.end(), [](const DistortionMap& a, const DistortionMap& b) {
+        return a.last_used < b.last_used;
+      });
+      glDeleteTextures(1, &oldest->texture);
+      maps.erase(oldest);
+    }
+    maps.push_back(map);
+    return maps.back();
+  }
+
+  // OpenCV K (pixel centres at integers, y down) -> GL clip space with the y flip folded in,
+  // so that window row r holds image row r and glReadPixels returns rows top first.
+  Eigen::Matrix4d ClipFromCamera(const Eigen::Matrix3d& K, int width, int height) const {
+    const double n = options.near_m, f = options.far_m;
+    Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
+    P(0, 0) = 2.0 * K(0, 0) / width;
+    P(0, 1) = 2.0 * K(0, 1) / width;
+    P(0, 2) = 2.0 * (K(0, 2) + 0.5) / width - 1.0;
+    P(1, 1) = 2.0 * K(1, 1) / height;
+    P(1, 2) = 2.0 * (K(1, 2) + 0.5) / height - 1.0;
+    P(2, 2) = (f + n) / (f - n);
+    P(2, 3) = -2.0 * f * n / (f - n);
+    P(3, 2) = 1.0;
+    return P;
+  }
+
+  RenderResult Render(const Camera& camera, const RenderRequest& request) {
+    camera.Check();
+    request.shading.Check();
+    if (camera.width > max_size || camera.height > max_size)
+      throw InputError("", "camera " + camera.name + ": image size " + std::to_string(camera.width) + "x" +
+                               std::to_string(camera.height) + " exceeds the OpenGL limit of " +
+                               std::to_string(max_size) + " pixels");
+    std::vector<int> drawn = request.meshes;
+    if (drawn.empty())
+      for (int i = 0; i < static_cast<int>(meshes.size()); ++i) drawn.push_back(i);
+    for (int handle : drawn)
+      if (handle < 0 || handle >= static_cast<int>(meshes.size()))
+        throw UsageError("MeshRenderer::Render: unknown mesh handle " + std::to_string(handle));
+    context.MakeCurrent();
+    const ShadingOptions& shading = request.shading;
+    const bool float_color = shading.color_type == PixelType::kFloat32;
+    const bool distorted = camera.has_distortion();
+
+    // Ideal pinhole camera rendered first: the camera itself, or the enlarged ideal buffer.
+    Eigen::Matrix3d ideal_K = camera.K;
+    int ideal_width = camera.width, ideal_height = camera.height;
+    const DistortionMap* map = nullptr;
+    if (distorted) {
+      map = &MapFor(camera);
+      ideal_K(0, 2) -= map->ideal_x0;
+      ideal_K(1, 2) -= map->ideal_y0;
+      ideal_width = map->ideal_width;
+      ideal_height = map->ideal_height;
+    }
+
+    const GLenum draw_buffers[kNumAttachments] = {
+        static_cast<GLenum>(request.color ? GL_COLOR_ATTACHMENT0 : GL_NONE),
+        static_cast<GLenum>(request.depth ? GL_COLOR_ATTACHMENT1 : GL_NONE),
+        static_cast<GLenum>(request.triangle_id ? GL_COLOR_ATTACHMENT2 : GL_NONE),
+        static_cast<GLenum>(request.silhouette ? GL_COLOR_ATTACHMENT3 : GL_NONE)};
+    Eigen::Vector4f background(1.0f, 1.0f, 1.0f, 1.0f);
+    for (int c = 0; c < 3; ++c)
+      background[c] = shading.srgb_output ? EncodeSrgb(shading.background[c])
+                                          : static_cast<float>(std::clamp(shading.background[c], 0.0, 1.0));
+    auto clear = [&]() {
+      const GLfloat zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+      const GLint minus_one[4] = {-1, -1, -1, -1};
+      glDrawBuffers(kNumAttachments, draw_buffers);
+      // glClearBuffer* index i is the i-th draw buffer slot; NONE slots are ignored.
+      if (request.color) glClearBufferfv(GL_COLOR, kColor, background.data());
+      if (request.depth) glClearBufferfv(GL_COLOR, kCameraZ, zero);
+      if (request.triangle_id) glClearBufferiv(GL_COLOR, kTriangleId, minus_one);
+      if (request.silhouette) glClearBufferfv(GL_COLOR, kMask, zero);
+    };
+
+    // Pass 1: rasterise into the ideal pinhole buffer.
+    direct.Ensure(ideal_width, ideal_height, float_color, /*want_depth=*/true);
+    glViewport(0, 0, ideal_width, ideal_height);
+    clear();
+    const GLfloat far_depth = 1.0f;
+    glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_BLEND);
+
+    Eigen::Matrix4d cam_from_world = Eigen::Matrix4d::Identity();
+    cam_from_world.topLeftCorner<3, 3>() = camera.rotation;
+    cam_from_world.topRightCorner<3, 1>() = camera.translation;
+    const Eigen::Matrix4d clip_from_world = ClipFromCamera(ideal_K, ideal_width, ideal_height) * cam_from_world;
+    const GLuint program = request.color ? color_program : geometry_program;
+    glUseProgram(program);
+    SetMatrix(program, "clip_from_world", clip_from_world);
+    SetMatrix(program, "cam_from_world", cam_from_world);
+    if (request.color) {
+      const Eigen::Vector3f light = shading.light_direction_in_world.normalized().cast<float>();
+      const Eigen::Vector3f center = camera.center_in_world().cast<float>();
+      glUniform1i(glGetUniformLocation(program, "lit"), shading.lit ? 1 : 0);
+      glUniform1i(glGetUniformLocation(program, "headlight"), shading.headlight ? 1 : 0);
+      glUniform3fv(glGetUniformLocation(program, "light_direction"), 1, light.data());
+      glUniform3fv(glGetUniformLocation(program, "camera_center"), 1, center.data());
+      glUniform1f(glGetUniformLocation(program, "ambient"), static_cast<float>(shading.ambient));
+      glUniform1f(glGetUniformLocation(program, "diffuse"), static_cast<float>(shading.diffuse));
+      glUniform1i(glGetUniformLocation(program, "srgb_output"), shading.srgb_output ? 1 : 0);
+      glUniform1i(glGetUniformLocation(program, "albedo_texture"), 0);
+    }
+    const GLint id_offset_location = glGetUniformLocation(program, "id_offset");
+    const GLint use_texture_location = glGetUniformLocation(program, "use_texture");
+    for (int handle : drawn) {
+      const GpuMesh& mesh = meshes[handle];
+      if (mesh.num_faces == 0) continue;
+      glBindVertexArray(mesh.vertex_array);
+      if (!mesh.has_colors) {
+        const Eigen::Vector3f albedo = shading.default_albedo.cast<float>();
+        glVertexAttrib3f(2, albedo.x(), albedo.y(), albedo.z());
+      }
+      if (request.color) {
+        glUniform1i(use_texture_location, mesh.texture ? 1 : 0);
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D, mesh.texture);
+      }
+      glUniform1i(id_offset_location, mesh.id_offset);
+      glDrawElements(GL_TRIANGLES, mesh.num_faces * 3, GL_UNSIGNED_INT, nullptr);
+    }
+    glBindVertexArray(0);
+
+    // Pass 2 (distortion): remap the ideal buffer into the distorted image.
+    if (distorted) {
+      remap.Ensure(camera.width, camera.height, float_color, /*want_depth=*/false);
+      glViewport(0, 0, camera.width, camera.height);
+      glDisable(GL_DEPTH_TEST);
+      glDrawBuffers(kNumAttachments, draw_buffers);
+      glUseProgram(remap_program);
+      const char* samplers[kNumAttachments] = {"ideal_color", "ideal_camera_z", "ideal_triangle_id", "ideal_mask"};
+      for (int i = 0; i < kNumAttachments; ++i) {
+        glActiveTexture(GL_TEXTURE1 + i);
+        glBindTexture(GL_TEXTURE_2D, direct.textures[i]);
+        glUniform1i(glGetUniformLocation(remap_program, samplers[i]), 1 + i);
+      }
+      glActiveTexture(GL_TEXTURE0);
+      glBindTexture(GL_TEXTURE_2D, map->texture);
+      glUniform1i(glGetUniformLocation(remap_program, "ideal_from_pixel"), 0);
+      glUniform2i(glGetUniformLocation(remap_program, "ideal_size"), ideal_width, ideal_height);
+      glUniform2f(glGetUniformLocation(remap_program, "texture_size"), static_cast<float>(direct.width),
+                  static_cast<float>(direct.height));
+      glUniform4fv(glGetUniformLocation(remap_program, "background"), 1, background.data());
+      glBindVertexArray(empty_vertex_array);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+      glBindVertexArray(0);
+    }
+
+    // Read back (rows come out top first thanks to the flipped projection).
+    RenderResult result;
+    const int w = camera.width, h = camera.height;
+    auto read = [&](Attachment attachment, GLenum format, GLenum type, void* data) {
+      glReadBuffer(GL_COLOR_ATTACHMENT0 + attachment);
+      glReadPixels(0, 0, w, h, format, type, data);
+    };
+    if (request.color) {
+      result.color = Image(w, h, 3, shading.color_type);
+      read(kColor, GL_RGB, float_color ? GL_FLOAT : GL_UNSIGNED_BYTE, result.color.data.data());
+    }
+    if (request.depth) {
+      result.depth = Image(w, h, 1, PixelType::kFloat32);
+      read(kCameraZ, GL_RED, GL_FLOAT, result.depth.data.data());
+    }
+    if (request.silhouette) {
+      result.silhouette = Image(w, h, 1, PixelType::kUInt8);
+      read(kMask, GL_RED, GL_UNSIGNED_BYTE, result.silhouette.data.data());
+    }
+    if (request.triangle_id) {
+      result.triangle_id.width = w;
+      result.triangle_id.height = h;
+      result.triangle_id.ids.resize(static_cast<std::size_t>(w) * h);
+      read(kTriangleId, GL_RED_INTEGER, GL_INT, result.triangle_id.ids.data());
+    }
+    const GLenum error = glGetError();
+    if (error != GL_NO_ERROR) {
+      std::ostringstream out;
+      out << "OpenGL: rendering camera " << camera.name << " failed (GL error 0x" << std::hex << error << ")";
+      throw RenderContextError(out.str());
+    }
+    return result;
+  }
+};
+
+MeshRenderer::MeshRenderer(const MeshRendererOptions& options) {
+  options.Check();
+  impl_ = std::make_unique<Impl>(options);
+}
+
+MeshRenderer::~MeshRenderer() = default;
+
+int MeshRenderer::AddMesh(const Mesh& mesh, const std::string& name, const Image& texture) {
+  return impl_->AddMesh(mesh, name, texture);
+}
+
+void MeshRenderer::UpdateVertices(int handle, const RowMatrixX3d& vertices) {
+  if (handle < 0 || handle >= num_meshes())
+    throw UsageError("MeshRenderer::UpdateVertices: unknown mesh handle " + std::to_string(handle));
+  GpuMesh& mesh = impl_->meshes[handle];
+  if (vertices.rows() != mesh.num_mesh_vertices)
+    throw InputError(mesh.name, "got " + std::to_string(vertices.rows()) + " vertices for a mesh uploaded with " +
+                                    std::to_string(mesh.num_mesh_vertices));
+  CheckVertices(vertices, mesh.name);
+  impl_->context.MakeCurrent();
+  impl_->UploadGeometry(&mesh, vertices, /*allocate=*/false);
+}
+
+int MeshRenderer::num_meshes() const { return static_cast<int>(impl_->meshes.size()); }
+
+int MeshRenderer::id_offset(int handle) const {
+  if (handle < 0 || handle >= num_meshes())
+    throw UsageError("MeshRenderer::id_offset: unknown mesh handle " + std::to_string(handle));
+  return impl_->meshes[handle].id_offset;
+}
+
+RenderResult MeshRenderer::Render(const Camera& camera, const RenderRequest& request) {
+  return impl_->Render(camera, request);
+}
+
+const EglContextInfo& MeshRenderer::context_info() const { return impl_->context.info(); }
+
+}  // namespace confluent

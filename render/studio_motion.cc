@@ -1,0 +1,161 @@
+#include "render/studio_motion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "core/error.h"
+
+namespace confluent {
+namespace {
+
+using Eigen::Vector3d;
+
+// One keyframe: time, root yaw (degrees about +z) and per-joint angles in degrees.
+// For most joints the angles are (about x, about y, about z) of the parent frame, composed as
+// Rz * Ry * Rx. Elbows use x as a hinge angle (flexion, forearm towards the front).
+struct Key {
+  double time_s;
+  double yaw_deg;
+  std::map<std::string, Vector3d> angles;
+};
+
+// Shoulder abduction that raises the arm sideways: about +y for the left arm (at -x), -y for
+// the right. Flexion raises it forwards (about +x).
+Vector3d Shoulder(bool left, double abduction_deg, double flexion_deg = 0.0, double twist_deg = 0.0) {
+  return Vector3d(flexion_deg, left ? abduction_deg : -abduction_deg, left ? -twist_deg : twist_deg);
+}
+
+std::vector<Key> Keys() {
+  const Vector3d zero = Vector3d::Zero();
+  auto arms = [](double abduction, double flexion_left, double flexion_right, double elbow) {
+    return std::map<std::string, Vector3d>{
+        {"left_shoulder", Shoulder(true, abduction, flexion_left)},
+        {"right_shoulder", Shoulder(false, abduction, flexion_right)},
+        {"left_elbow", Vector3d(elbow, 0, 0)},
+        {"right_elbow", Vector3d(elbow, 0, 0)}};
+  };
+  auto merge = [](std::map<std::string, Vector3d> a, const std::map<std::string, Vector3d>& b) {
+    for (const auto& [k, v] : b) a[k] = v;
+    return a;
+  };
+  std::vector<Key> keys;
+  keys.push_back({0.0, 0.0, arms(0, 0, 0, 10)});
+  // Arms over the head, looking up.
+  keys.push_back({0.55, 0.0, merge(arms(135, 0, 0, 15), {{"spine", Vector3d(6, 0, 0)}, {"head", Vector3d(12, 0, 0)}})});
+  // Arms out sideways.
+  keys.push_back({0.95, 0.0, merge(arms(55, 0, 0, 5), {{"chest", Vector3d(0, 0, 15)}})});
+  // A full turn with swinging arms.
+  keys.push_back({1.55, 180.0,
+                  merge(arms(50, 45, -35, 25), {{"spine", Vector3d(-5, 8, 0)}, {"chest", Vector3d(0, 0, -20)},
+                                                 {"left_hip", Vector3d(20, 0, 0)}, {"left_knee", Vector3d(-30, 0, 0)}})});
+  keys.push_back({2.15, 360.0, merge(arms(30, -20, 30, 40), {{"chest", Vector3d(0, 0, 10)}})});
+  // Kick with the right leg, arms out for balance.
+  keys.push_back({2.45, 360.0,
+                  merge(arms(35, 20, 20, 30), {{"right_hip", Vector3d(-25, 0, 0)}, {"right_knee", Vector3d(-50, 0, 0)},
+                                                {"left_knee", Vector3d(-12, 0, 0)}})});
+  keys.push_back({2.75, 360.0,
+                  merge(arms(70, -25, 10, 15), {{"right_hip", Vector3d(85, 0, 0)}, {"right_knee", Vector3d(-8, 0, 0)},
+                                                {"right_ankle", Vector3d(-25, 0, 0)}, {"left_knee", Vector3d(-15, 0, 0)},
+                                                {"spine", Vector3d(12, 0, 0)}, {"chest", Vector3d(4, 0, 0)}})});
+  keys.push_back({3.05, 360.0, merge(arms(15, 0, 0, 20), {{"head", Vector3d(-10, 0, 20)}})});
+  // Crouch with the arms forward.
+  keys.push_back({3.55, 360.0,
+                  merge(arms(10, 75, 70, 35),
+                        {{"left_hip", Vector3d(100, 0, 0)}, {"right_hip", Vector3d(100, 0, 0)},
+                         {"left_knee", Vector3d(-125, 0, 0)}, {"right_knee", Vector3d(-125, 0, 0)},
+                         {"left_ankle", Vector3d(30, 0, 0)}, {"right_ankle", Vector3d(30, 0, 0)},
+                         {"spine", Vector3d(-25, 0, 0)}, {"chest", Vector3d(-8, 0, 0)}, {"head", Vector3d(25, 0, 0)}})});
+  keys.push_back({4.0, 360.0, arms(0, 0, 0, 10)});
+  (void)zero;
+  return keys;
+}
+
+// Cubic Hermite interpolation of per-key values with Catmull-Rom tangents (zero at the ends).
+template <typename Get>
+double Spline(const std::vector<Key>& keys, double t, Get get) {
+  if (t <= keys.front().time_s) return get(keys.front());
+  if (t >= keys.back().time_s) return get(keys.back());
+  std::size_t i = 0;
+  while (keys[i + 1].time_s < t) ++i;
+  const double t0 = keys[i].time_s, t1 = keys[i + 1].time_s, h = t1 - t0;
+  auto tangent = [&](std::size_t k) {
+    if (k == 0 || k + 1 == keys.size()) return 0.0;
+    return (get(keys[k + 1]) - get(keys[k - 1])) / (keys[k + 1].time_s - keys[k - 1].time_s);
+  };
+  const double u = (t - t0) / h;
+  const double u2 = u * u, u3 = u2 * u;
+  return (2 * u3 - 3 * u2 + 1) * get(keys[i]) + (u3 - 2 * u2 + u) * h * tangent(i) +
+         (-2 * u3 + 3 * u2) * get(keys[i + 1]) + (u3 - u2) * h * tangent(i + 1);
+}
+
+Eigen::Quaterniond EulerZYX(const Vector3d& deg) {
+  const Vector3d r = deg * M_PI / 180.0;
+  return Eigen::Quaterniond(Eigen::AngleAxisd(r.z(), Vector3d::UnitZ()) * Eigen::AngleAxisd(r.y(), Vector3d::UnitY()) *
+                            Eigen::AngleAxisd(r.x(), Vector3d::UnitX()));
+}
+
+}  // namespace
+
+void StudioMotionOptions::Check() const {
+  if (num_frames < 1) throw UsageError("frames: must be at least 1");
+  if (!(fps > 0.0) || !std::isfinite(fps)) throw UsageError("fps: must be positive");
+  if (!(speed > 0.0) || !std::isfinite(speed)) throw UsageError("speed: must be positive");
+}
+
+double DefaultPerformanceDuration() { return Keys().back().time_s; }
+
+std::vector<Pose> DefaultPerformance(const Skeleton& skeleton, const StudioMotionOptions& options) {
+  options.Check();
+  const std::vector<Key> keys = Keys();
+  std::vector<std::string> animated;
+  for (const auto& key : keys)
+    for (const auto& entry : key.angles)
+      if (std::find(animated.begin(), animated.end(), entry.first) == animated.end()) animated.push_back(entry.first);
+  for (const char* name : {"pelvis", "left_elbow", "right_elbow", "left_ankle", "right_ankle", "left_toe", "right_toe"})
+    if (skeleton.IndexOf(name) < 0)
+      throw UsageError(std::string("default performance: the skeleton has no joint '") + name + "'");
+  for (const auto& name : animated)
+    if (skeleton.IndexOf(name) < 0)
+      throw UsageError("default performance: the skeleton has no joint '" + name + "'");
+  const std::vector<Vector3d> rest = skeleton.RestPositions();
+  const int root = 0;
+  std::vector<Pose> poses;
+  for (int f = 0; f < options.num_frames; ++f) {
+    const double t = f / options.fps * options.speed;
+    Pose pose = Pose::Rest(skeleton.size());
+    const double yaw = Spline(keys, t, [](const Key& k) { return k.yaw_deg; });
+    pose.local_rotations[root] = Eigen::Quaterniond(Eigen::AngleAxisd(yaw * M_PI / 180.0, Vector3d::UnitZ()));
+    for (const auto& name : animated) {
+      Vector3d angles;
+      for (int c = 0; c < 3; ++c)
+        angles(c) = Spline(keys, t, [&](const Key& k) {
+          const auto it = k.angles.find(name);
+          return it == k.angles.end() ? 0.0 : it->second(c);
+        });
+      const int joint = skeleton.IndexOf(name);
+      if (name == "left_elbow" || name == "right_elbow") {
+        // Hinge about (upper arm direction) x (+y): flexion swings the forearm forwards.
+        const int parent = skeleton.joints[joint].parent;
+        const Vector3d dir = (rest[joint] - rest[parent]).normalized();
+        const Vector3d hinge = dir.cross(Vector3d::UnitY()).normalized();
+        pose.local_rotations[joint] = Eigen::Quaterniond(Eigen::AngleAxisd(angles.x() * M_PI / 180.0, hinge));
+      } else {
+        pose.local_rotations[joint] = EulerZYX(angles);
+      }
+    }
+    // Keep the lowest foot point on the floor: shift the root vertically.
+    const std::vector<Vector3d> positions = JointPositions(skeleton, pose);
+    double lowest = 1e9;
+    for (const char* name : {"left_ankle", "right_ankle", "left_toe", "right_toe"}) {
+      const int j = skeleton.IndexOf(name);
+      lowest = std::min(lowest, positions[j].z() - rest[j].z());
+    }
+    pose.root_translation.z() -= lowest;
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+}  // namespace confluent

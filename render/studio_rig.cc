@@ -1,0 +1,76 @@
+#include "render/studio_rig.h"
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "core/error.h"
+
+namespace confluent {
+
+void StudioRigOptions::Check() const {
+  if (num_ring_cameras < 1 || num_ring_cameras > 256) throw UsageError("cameras: must be within [1, 256]");
+  if (num_heldout_cameras < 0 || num_heldout_cameras > 64) throw UsageError("heldout: must be within [0, 64]");
+  if (!(ring_radius_m > 0.5) || !(heldout_radius_m > 0.5)) throw UsageError("camera radius: must exceed 0.5 m");
+  if (width_px < 16 || height_px < 16 || width_px > 16384 || height_px > 16384)
+    throw UsageError("image size: width and height must be within [16, 16384] pixels");
+  if (!(focal_px >= 0.0) || !std::isfinite(focal_px)) throw UsageError("focal: must be positive (or 0 for automatic)");
+  if (!std::isfinite(k1) || std::abs(k1) > 0.5) throw UsageError("k1: must be within [-0.5, 0.5]");
+  if (!(intrinsics_jitter >= 0.0 && intrinsics_jitter < 0.2)) throw UsageError("intrinsics_jitter: must be within [0, 0.2)");
+  if (!target_in_world.allFinite()) throw UsageError("target: must be finite");
+}
+
+Camera LookAtCamera(const std::string& name, const Eigen::Vector3d& center_in_world,
+                    const Eigen::Vector3d& target_in_world, int width_px, int height_px, double focal_px) {
+  const Eigen::Vector3d z = (target_in_world - center_in_world).normalized();
+  Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ());
+  if (x.norm() < 1e-9) x = Eigen::Vector3d::UnitX();  // looking straight up or down
+  x.normalize();
+  const Eigen::Vector3d y = z.cross(x);
+  Camera camera;
+  camera.name = name;
+  camera.width = width_px;
+  camera.height = height_px;
+  camera.K << focal_px, 0, (width_px - 1) / 2.0, 0, focal_px, (height_px - 1) / 2.0, 0, 0, 1;
+  camera.rotation.row(0) = x.transpose();
+  camera.rotation.row(1) = y.transpose();
+  camera.rotation.row(2) = z.transpose();
+  camera.translation = -camera.rotation * center_in_world;
+  return camera;
+}
+
+Rig MakeStudioRig(const StudioRigOptions& options) {
+  options.Check();
+  std::mt19937 rng(options.seed * 7919u + 13u);
+  std::uniform_real_distribution<double> jitter(-1.0, 1.0);
+  const double focal = options.focal_px > 0.0 ? options.focal_px : 1.1 * options.width_px;
+  auto make = [&](const std::string& name, double azimuth_deg, double radius, double height) {
+    const double a = azimuth_deg * M_PI / 180.0;
+    const Eigen::Vector3d center = options.target_in_world.cwiseProduct(Eigen::Vector3d(1, 1, 0)) +
+                                   Eigen::Vector3d(-radius * std::sin(a), radius * std::cos(a), height);
+    Camera camera = LookAtCamera(name, center, options.target_in_world, options.width_px, options.height_px,
+                                 focal * (1.0 + options.intrinsics_jitter * jitter(rng)));
+    camera.K(1, 1) = camera.K(0, 0);
+    camera.K(0, 2) += options.intrinsics_jitter * 0.5 * options.width_px * 0.1 * jitter(rng);
+    camera.K(1, 2) += options.intrinsics_jitter * 0.5 * options.height_px * 0.1 * jitter(rng);
+    camera.dist(0) = options.k1;
+    return camera;
+  };
+  Rig rig;
+  const double step = 360.0 / options.num_ring_cameras;
+  for (int i = 0; i < options.num_ring_cameras; ++i) {
+    char name[16];
+    std::snprintf(name, sizeof(name), "cam%02d", i);
+    rig.cameras.push_back(
+        make(name, i * step, options.ring_radius_m, options.ring_height_m + (i % 2) * options.ring_height_step_m));
+  }
+  const double heldout_heights[] = {0.9, 2.7, 1.3, 2.2};
+  for (int i = 0; i < options.num_heldout_cameras; ++i) {
+    // Between ring cameras, spread around the circle.
+    const double azimuth = (0.5 + std::floor(i * options.num_ring_cameras / std::max(1.0, options.num_heldout_cameras * 1.0))) * step + 7.0 * i;
+    rig.cameras.push_back(make("holdout" + std::to_string(i), azimuth, options.heldout_radius_m, heldout_heights[i % 4]));
+  }
+  return rig;
+}
+
+}  // namespace confluent

@@ -1,0 +1,39 @@
+#pragma once
+// The studio's camera rig: a ring of cameras around the capture volume plus held-out cameras
+// at other azimuths and heights (for evaluation).
+
+#include <Eigen/Core>
+
+#include "calib/camera.h"
+
+namespace confluent {
+
+// Layout and intrinsics of the studio rig. Azimuth 0 is the +y axis (the actor's front at rest),
+// increasing counter-clockwise seen from above.
+struct StudioRigOptions {
+  int num_ring_cameras = 8;       // "cam00", "cam01", ... evenly spaced in azimuth
+  int num_heldout_cameras = 2;    // "holdout0", ... between ring cameras, at other heights
+  double ring_radius_m = 3.8;     // horizontal distance of ring cameras from the target
+  double ring_height_m = 1.6;     // camera height; odd ring cameras are ring_height_step_m higher
+  double ring_height_step_m = 0.5;
+  double heldout_radius_m = 3.4;
+  Eigen::Vector3d target_in_world = Eigen::Vector3d(0.0, 0.0, 1.0);  // every camera looks here
+  int width_px = 1024;
+  int height_px = 768;
+  double focal_px = 0.0;          // 0: 1.1 * width (about 49 degrees horizontal field of view)
+  double k1 = 0.0;                // radial distortion k1 of every camera (e.g. -0.05), 0 = none
+  double intrinsics_jitter = 0.01;  // relative random spread of focal length and principal point
+  unsigned seed = 1;
+  // Throws UsageError when a value is out of range.
+  void Check() const;
+};
+
+// The rig: ring cameras first, then the held-out cameras. Deterministic for given options.
+Rig MakeStudioRig(const StudioRigOptions& options = {});
+
+// A camera at `center_in_world` looking at `target_in_world`, image x along the horizontal
+// (world up = +z maps to image up).
+Camera LookAtCamera(const std::string& name, const Eigen::Vector3d& center_in_world,
+                    const Eigen::Vector3d& target_in_world, int width_px, int height_px, double focal_px);
+
+}  // namespace confluent

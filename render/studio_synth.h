@@ -1,0 +1,66 @@
+#pragma once
+// `confluent synth`: renders a synthetic multi-camera capture of an actor in the studio, in the
+// recorded camera folder layout (DESIGN.md section 3), plus a separate ground-truth folder.
+//
+// Capture folder:  intri.yml, extri.yml (every camera, held-out ones included),
+//                  images/<cam>/000000.png ..., background/<cam>.png (clean plates), scan.ply.
+// Ground truth:    masks/<cam>/000000.png (0/255), meshes/000000.ply (posed actor, same
+//                  topology as scan.ply), scan.ply (rest mesh with colours and segment labels),
+//                  skeleton.json, joints.json (per-frame joint positions and rotations; the
+//                  procedural actor only), cameras (intri.yml, extri.yml), synth.json (options).
+
+#include <string>
+
+#include "core/progress.h"
+#include "core/skinning.h"
+#include "render/studio_actor.h"
+#include "render/studio_motion.h"
+#include "render/studio_rig.h"
+#include "render/studio_scene.h"
+
+namespace confluent {
+
+// Everything `confluent synth` can change.
+struct StudioSynthOptions {
+  std::string capture_dir;        // output capture folder (required)
+  std::string ground_truth_dir;   // empty: "<capture>_gt" beside the capture folder
+  StudioActorOptions actor;
+  StudioMotionOptions motion;
+  StudioRigOptions rig;
+  StudioSceneOptions scene;
+  FloorShadowOptions shadow;
+  SkinningMethod skinning = SkinningMethod::kDualQuaternion;
+  // Instead of the procedural actor: a folder of per-frame meshes (.obj/.ply, read in name
+  // order, fixed topology). `sequence_up_axis` is 'z' or 'y' (a Y-up sequence is rotated to Z-up);
+  // the sequence is moved so that frame 0 stands centred on the origin with its lowest point on
+  // the floor. Meshes without colours get procedural ones.
+  std::string actor_sequence_dir;
+  char sequence_up_axis = 'z';
+  double noise_sigma = 2.0;       // Gaussian sensor noise, 8-bit grey levels (0 = none)
+  double gain_spread = 0.06;      // per-camera gain drawn from [1 - spread, 1 + spread]
+  unsigned seed = 1;              // noise and gains
+  int threads = 2;                // image post-processing and encoding threads
+  // Throws UsageError for bad values (also of the nested options).
+  void Check() const;
+};
+
+// What SynthesizeCapture produced.
+struct StudioSynthSummary {
+  std::string capture_dir;
+  std::string ground_truth_dir;
+  int num_frames = 0;
+  int num_cameras = 0;
+  int num_vertices = 0;
+  int num_triangles = 0;
+  double seconds = 0.0;  // wall-clock time
+};
+
+// The default ground-truth folder for a capture folder: "<parent>/<name>_gt".
+std::string DefaultGroundTruthDir(const std::string& capture_dir);
+
+// Renders and writes the capture and its ground truth. Reports progress per frame ("synth").
+// Throws UsageError for bad options, InputError for an unreadable actor sequence (naming the
+// file), OutputError when writing fails, RenderContextError when no GL context can be made.
+StudioSynthSummary SynthesizeCapture(const StudioSynthOptions& options, const ProgressCallback& progress = {});
+
+}  // namespace confluent
