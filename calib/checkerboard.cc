@@ -154,14 +154,12 @@ bool DetectCheckerboard(const Image& image, const CheckerboardSpec& board, const
   std::vector<cv::Point2f> points;
   bool found = false;
   bool refined = false;
-  if (options.use_sector_based) {
-    found = cv::findChessboardCornersSB(work, pattern, points, cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
-    refined = found;
-  }
-  if (!found) {
+  if (options.try_classic)
     found = cv::findChessboardCorners(work, pattern, points,
                                       cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK);
-    refined = false;
+  if (!found && options.try_sector_based) {
+    found = cv::findChessboardCornersSB(work, pattern, points, cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
+    refined = found;
   }
   if (!found || static_cast<int>(points.size()) != board.num_corners()) return false;
   if (scale != 1.0) {

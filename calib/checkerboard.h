@@ -46,9 +46,12 @@ void ParseBoardSize(const std::string& text, int* cols, int* rows);
 
 // Options of DetectCheckerboard.
 struct CheckerboardDetectOptions {
-  // Use OpenCV's sector-based detector (findChessboardCornersSB) first; it is slower but
-  // finds boards under stronger blur and distortion. The classic detector is always tried too.
-  bool use_sector_based = false;
+  // Try OpenCV's classic detector (findChessboardCorners, fast, with a quick rejection of
+  // images without a board).
+  bool try_classic = true;
+  // Then, if that failed, the sector-based detector (findChessboardCornersSB): slower, but it
+  // finds small, blurred and oblique boards the classic one misses.
+  bool try_sector_based = true;
   // Half size of the cornerSubPix search window, pixels; 0 = from the corner spacing.
   int subpix_half_window_px = 0;
   // Images wider than this are detected on a downscaled copy first (then refined at full

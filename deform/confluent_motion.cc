@@ -390,7 +390,8 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
     }
     return q;
   };
-  const bool has_history = s.has_previous && static_cast<int>(s.previous_full.size()) == m;
+  const bool has_history =
+      s.options.temporal_signs && s.has_previous && static_cast<int>(s.previous_full.size()) == m;
   const std::vector<Eigen::Vector4d> full_q = align(full, has_history ? &s.previous_full : nullptr);
   if (!degenerate.empty())
     summary.warnings.push_back(std::to_string(degenerate.size()) +
@@ -436,7 +437,8 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
   } else {
     degenerate.clear();
     const auto relative = s.ConstraintRotations(s.intermediate_template, template_vertices, &degenerate);
-    const bool same = s.previous_reference == reference && static_cast<int>(s.previous_constraints.size()) == m;
+    const bool same = s.options.temporal_signs && s.previous_reference == reference &&
+                      static_cast<int>(s.previous_constraints.size()) == m;
     q = align(relative, same ? &s.previous_constraints : nullptr);
   }
 

@@ -23,6 +23,10 @@ struct ConfluentMotionOptions {
   // Near a singularity, use the previous frame (template pose and the scan's per-triangle
   // rotations) as an intermediate reference, so only the rotation since then is interpolated.
   bool intermediate_reference = true;
+  // Keep each constraint quaternion in the hemisphere of its value in the previous frame, so w
+  // changes continuously (past 180 degrees it goes negative). Off: per frame, the hemisphere of
+  // the neighbours only (rotations flip direction when they cross 180 degrees).
+  bool temporal_signs = true;
   // When every pair has a segment label and the segments move rigidly, use precomputed
   // harmonic weight fields (one per segment) instead of a solve per frame.
   bool segment_fields = true;

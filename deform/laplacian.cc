@@ -1,5 +1,7 @@
 #include "deform/laplacian.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>

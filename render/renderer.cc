@@ -311,6 +311,8 @@ void MeshRendererOptions::Check() const {
     throw UsageError("MeshRendererOptions: need 0 < near_m < far_m < infinity");
   if (!(max_undistorted_scale >= 1.0) || max_undistorted_scale > 8.0)
     throw UsageError("MeshRendererOptions::max_undistorted_scale: must be in [1, 8]");
+  if (distortion_supersampling < 1 || distortion_supersampling > 4)
+    throw UsageError("MeshRendererOptions::distortion_supersampling: must be in [1, 4]");
 }
 
 void ShadingOptions::Check() const {
@@ -585,13 +587,15 @@ struct MeshRenderer::Impl {
     min_y = std::max(min_y, -extra * h);
     max_x = std::min(max_x, w - 1.0 + extra * w);
     max_y = std::min(max_y, h - 1.0 + extra * h);
+    // Ideal buffer pixel (i, j) has its centre at ideal pixel ((i + 0.5) / S - 0.5 + x0, ...).
+    const int S = options.distortion_supersampling;
     map.ideal_x0 = static_cast<int>(std::floor(min_x)) - 2;
     map.ideal_y0 = static_cast<int>(std::floor(min_y)) - 2;
-    map.ideal_width = std::min(static_cast<int>(std::ceil(max_x)) + 3 - map.ideal_x0, max_size);
-    map.ideal_height = std::min(static_cast<int>(std::ceil(max_y)) + 3 - map.ideal_y0, max_size);
+    map.ideal_width = std::min(S * (static_cast<int>(std::ceil(max_x)) + 3 - map.ideal_x0), max_size);
+    map.ideal_height = std::min(S * (static_cast<int>(std::ceil(max_y)) + 3 - map.ideal_y0), max_size);
     for (std::size_t i = 0; i < ideal.size(); i += 2) {
-      ideal[i] -= static_cast<float>(map.ideal_x0);
-      ideal[i + 1] -= static_cast<float>(map.ideal_y0);
+      ideal[i] = static_cast<float>(S * (ideal[i] - map.ideal_x0 + 0.5) - 0.5);
+      ideal[i + 1] = static_cast<float>(S * (ideal[i + 1] - map.ideal_y0 + 0.5) - 0.5);
     }
     glGenTextures(1, &map.texture);
     glBindTexture(GL_TEXTURE_2D, map.texture);
@@ -651,8 +655,14 @@ struct MeshRenderer::Impl {
     const DistortionMap* map = nullptr;
     if (distorted) {
       map = &MapFor(camera);
+      // Shift the principal point to the buffer origin, then scale by the supersampling.
+      const double S = options.distortion_supersampling;
       ideal_K(0, 2) -= map->ideal_x0;
       ideal_K(1, 2) -= map->ideal_y0;
+      ideal_K.row(0) *= S;
+      ideal_K.row(1) *= S;
+      ideal_K(0, 2) += 0.5 * S - 0.5;
+      ideal_K(1, 2) += 0.5 * S - 0.5;
       ideal_width = map->ideal_width;
       ideal_height = map->ideal_height;
     }

@@ -13,7 +13,8 @@
 // undistorted field of view) and then remapped on the GPU: each output (distorted) pixel
 // looks up its ideal pixel Camera::UndistortPixel(x, y), precomputed once per camera. Depth,
 // silhouette and triangle ids take the nearest ideal pixel (so they stay mutually consistent);
-// colour is sampled bilinearly.
+// colour is sampled bilinearly. The ideal buffer is supersampled (MeshRendererOptions::
+// distortion_supersampling) to keep the nearest-pixel error well below half a pixel.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -46,6 +47,9 @@ struct MeshRendererOptions {
   // Largest ideal buffer used for distortion, relative to the image size per axis: strong
   // barrel distortion needs a larger undistorted field of view; beyond this it is cropped.
   double max_undistorted_scale = 2.0;
+  // Resolution factor (1..4) of the ideal buffer for cameras with distortion: the remap takes
+  // the nearest ideal pixel, so its error is 0.5 px / factor (colour is sampled bilinearly).
+  int distortion_supersampling = 2;
   // Throws UsageError when a value is out of range.
   void Check() const;
 };

@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/mesh_ops.h"
+#include "core/mesh_validation.h"
 #include "tests/support/test_support.h"
 
 namespace confluent {
@@ -98,7 +99,7 @@ void ExpectPlyRoundTrip(bool binary) {
   options.binary = binary;
   options.double_precision = true;
   WriteMesh(dir / "scan.ply", mesh, options);
-  EXPECT_EQ(ReadFile(dir / "scan.ply").find(binary ? "binary_little_endian" : "format ascii"), 4u);
+  EXPECT_EQ(ReadFile(dir / "scan.ply").find(binary ? "format binary_little_endian" : "format ascii"), 4u);
   const Mesh back = ReadMesh(dir / "scan.ply");
   EXPECT_EQ(back.vertices, mesh.vertices);
   EXPECT_EQ(back.faces, mesh.faces);
@@ -298,6 +299,18 @@ TEST(MeshIo, ReadsLargeBinaryPlyQuickly) {
   const Mesh back = ReadMesh(dir / "big.ply");
   EXPECT_EQ(back.faces, mesh.faces);
   EXPECT_LT((back.vertices - mesh.vertices).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+TEST(MeshIo, ReadsTheMakeHumanBaseMesh) {
+  const std::string path = testing::SharedDataPath("makehuman/base.obj");
+  if (path.empty()) GTEST_SKIP() << "../shared/data/makehuman/base.obj is not available";
+  const Mesh mesh = ReadMesh(path);
+  EXPECT_EQ(mesh.num_vertices(), 19158);  // as documented in the data README
+  EXPECT_EQ(mesh.num_faces(), 2 * 18486);  // every polygon is a quad
+  EXPECT_TRUE(mesh.has_uvs());
+  const MeshReport report = ValidateMesh(mesh);
+  EXPECT_TRUE(report.is_manifold());
+  EXPECT_TRUE(report.unreferenced_vertices.empty());
 }
 
 // ---- errors: every one is an InputError whose message names the file.

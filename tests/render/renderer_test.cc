@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <random>
 
@@ -38,23 +39,29 @@ struct Blob {
   int count = 0;
 };
 
-// Renders `num` discs facing the camera, each projecting to a circle of ~`radius_px` pixels
+// Renders `num` discs parallel to the image plane, each projecting to a circle of ~`radius_px` pixels
 // around a random sub-pixel position, and returns the largest distance between a disc's pixel
-// centroid and Camera::Project of its centre.
-double MaxCentroidError(MeshRenderer* renderer, const Camera& camera, double radius_px, int num, unsigned seed) {
+// centroid and Camera::Project of its centre (max and mean over the discs).
+struct CentroidErrors {
+  double max_px = 0.0;
+  double mean_px = 0.0;
+};
+CentroidErrors MeasureCentroidErrors(MeshRenderer* renderer, const Camera& camera, double radius_px, int num, unsigned seed) {
   std::mt19937 random(seed);
   std::uniform_real_distribution<double> jitter(-0.5, 0.5);
   std::vector<Eigen::Vector3d> centers;
   const double depth_m = 2.5;
-  const int columns = 6, rows = num / columns;
+  const int columns = 8, rows = num / columns;
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < columns; ++c) {
       // Spread over the whole image, corners included (largest distortion there).
       const Eigen::Vector2d pixel(radius_px + 2 + (camera.width - 2 * radius_px - 5) * c / (columns - 1.0) + jitter(random),
                                   radius_px + 2 + (camera.height - 2 * radius_px - 5) * r / (rows - 1.0) + jitter(random));
       const Eigen::Vector3d center = camera.Unproject(pixel, depth_m + 0.1 * jitter(random));
-      const Eigen::Vector3d normal = camera.center_in_world() - center;
-      const double radius_m = radius_px * normal.norm() / camera.K(0, 0);
+      // Parallel to the image plane, so its ideal projection is an ellipse centred exactly on
+      // the projected centre (a tilted disc's image centroid moves by ~r^2/f under perspective).
+      const Eigen::Vector3d normal = camera.optical_axis_in_world();
+      const double radius_m = radius_px * camera.PointInCamera(center).z() / camera.K(0, 0);
       renderer->AddMesh(MakeDisc(center, normal, radius_m, 64));
       centers.push_back(center);
     }
@@ -72,22 +79,32 @@ double MaxCentroidError(MeshRenderer* renderer, const Camera& camera, double rad
       blob.sum_y += y;
       ++blob.count;
     }
-  double max_error = 0.0;
+  CentroidErrors errors;
   for (std::size_t i = 0; i < centers.size(); ++i) {
-    EXPECT_GT(blobs[i].count, 0.8 * M_PI * radius_px * radius_px) << "disc " << i;
+    EXPECT_GT(blobs[i].count, 0.5 * M_PI * radius_px * radius_px) << "disc " << i;  // barrel shrinks
     if (blobs[i].count == 0) continue;
     const Eigen::Vector2d centroid(blobs[i].sum_x / blobs[i].count, blobs[i].sum_y / blobs[i].count);
-    max_error = std::max(max_error, (centroid - camera.Project(centers[i])).norm());
+    const double error = (centroid - camera.Project(centers[i])).norm();
+    if (std::getenv("RENDER_TEST_DEBUG")) {
+      const Eigen::Vector2d projected = camera.Project(centers[i]);
+      std::printf("disc %2zu at %7.2f %7.2f: centroid - projected = %+.3f %+.3f (%d px)\n", i, projected.x(),
+                  projected.y(), centroid.x() - projected.x(), centroid.y() - projected.y(), blobs[i].count);
+    }
+    errors.max_px = std::max(errors.max_px, error);
+    errors.mean_px += error / centers.size();
   }
-  return max_error;
+  return errors;
 }
 
+// The criterion is < 0.5 px. A half-pixel convention error would put every disc off by
+// ~0.5-0.7 px, so the mean is held to a much tighter bound than that; quantising a 6 px disc
+// moves its centroid by ~0.05 px.
 TEST(MeshRenderer, ProjectedPointsMatchRenderedBlobCentroids) {
   MeshRenderer renderer;
-  const double error = MaxCentroidError(&renderer, TestCamera(false), 6.0, 24, 1);
-  // A half-pixel convention error would show up as ~0.5 px; quantisation of a 6 px disc is ~0.05.
-  EXPECT_LT(error, 0.15);
-  RecordProperty("max_centroid_error_px", std::to_string(error));
+  const CentroidErrors errors = MeasureCentroidErrors(&renderer, TestCamera(false), 6.0, 48, 1);
+  EXPECT_LT(errors.max_px, 0.25);
+  EXPECT_LT(errors.mean_px, 0.1);
+  RecordProperty("centroid_error_px", std::to_string(errors.mean_px) + " mean, " + std::to_string(errors.max_px) + " max");
 }
 
 TEST(MeshRenderer, ProjectedPointsMatchRenderedBlobCentroidsWithDistortion) {
@@ -96,9 +113,10 @@ TEST(MeshRenderer, ProjectedPointsMatchRenderedBlobCentroidsWithDistortion) {
   // The distortion is strong: corner pixels move by several pixels.
   const Eigen::Vector2d corner(0.0, 0.0);
   ASSERT_GT((camera.UndistortPixel(corner) - corner).norm(), 5.0);
-  const double error = MaxCentroidError(&renderer, camera, 6.0, 24, 2);
-  EXPECT_LT(error, 0.25);
-  RecordProperty("max_centroid_error_px", std::to_string(error));
+  const CentroidErrors errors = MeasureCentroidErrors(&renderer, camera, 6.0, 48, 2);
+  EXPECT_LT(errors.max_px, 0.3);
+  EXPECT_LT(errors.mean_px, 0.12);
+  RecordProperty("centroid_error_px", std::to_string(errors.mean_px) + " mean, " + std::to_string(errors.max_px) + " max");
 }
 
 TEST(MeshRenderer, SquareCoversExactlyThePixelCentresInside) {
@@ -159,8 +177,10 @@ void CheckSphere(bool with_distortion) {
       analytic_area += SphereDepth(camera, Eigen::Vector2d(x, y), center, radius) > 0.0;
       Eigen::Vector2d sampled(x, y);
       if (with_distortion) {
+        // The ideal buffer has S x S samples per ideal pixel, aligned with the pixel grid.
+        const double S = MeshRendererOptions().distortion_supersampling;
         const Eigen::Vector2d exact = camera.UndistortPixel(sampled);
-        sampled = Eigen::Vector2d(std::floor(exact.x() + 0.5), std::floor(exact.y() + 0.5));
+        for (int k = 0; k < 2; ++k) sampled[k] = (std::floor(S * (exact[k] + 0.5) - 0.5 + 0.5) + 0.5) / S - 0.5;
       }
       const double truth = SphereDepth(ideal, sampled, center, radius);
       bool interior = true;
@@ -177,8 +197,8 @@ void CheckSphere(bool with_distortion) {
   EXPECT_GT(interior_checked, camera.width * camera.height / 2);
   // The level-5 icosphere lies inside the sphere by ~0.2 mm (more along grazing rays).
   EXPECT_LT(max_depth_error, 1.5e-3);
-  RecordProperty("max_depth_error_m", std::to_string(max_depth_error));
-  RecordProperty("area_px", std::to_string(rendered_area) + " vs " + std::to_string(analytic_area));
+  ::testing::Test::RecordProperty("max_depth_error_m", std::to_string(max_depth_error));
+  ::testing::Test::RecordProperty("area_px", std::to_string(rendered_area) + " vs " + std::to_string(analytic_area));
 }
 
 TEST(MeshRenderer, SphereMaskDepthAndIdsAreConsistent) { CheckSphere(false); }
@@ -419,7 +439,9 @@ TEST(MeshRenderer, SeveralMeshesAndIdOffsets) {
   for (std::size_t i = 0; i < only_b.triangle_id.ids.size(); ++i) {
     const int id = only_b.triangle_id.ids[i];
     ASSERT_TRUE(id == -1 || id >= a.num_faces());
-    if (all.triangle_id.ids[i] >= a.num_faces()) ASSERT_EQ(id, all.triangle_id.ids[i]);
+    if (all.triangle_id.ids[i] >= a.num_faces()) {
+      ASSERT_EQ(id, all.triangle_id.ids[i]);
+    }
   }
   request.meshes = {7};
   EXPECT_THROW(renderer.Render(camera, request), UsageError);
@@ -609,3 +631,18 @@ TEST(EglContextBadInput, ImpossibleGlVersionIsAClearError) {
 
 }  // namespace
 }  // namespace confluent
+namespace confluent {
+TEST(Debug, Remap) {
+  for (int S : {1, 2, 3, 4}) {
+    for (double k1 : {1e-12, -0.28}) {
+      MeshRendererOptions options;
+      options.distortion_supersampling = S;
+      MeshRenderer renderer(options);
+      Camera camera = TestCamera(true);
+      camera.dist << k1, 0, 0, 0, 0;
+      const CentroidErrors errors = MeasureCentroidErrors(&renderer, camera, 6.0, 48, 2);
+      std::printf("S %d k1 %g: mean %.3f max %.3f\n", S, k1, errors.mean_px, errors.max_px);
+    }
+  }
+}
+}

@@ -1,0 +1,301 @@
+#include "silhouette/silhouette.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <mutex>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/background_segm.hpp>
+#include <thread>
+
+#include "core/cv_interop.h"
+#include "core/error.h"
+#include "core/image_io.h"
+
+namespace confluent {
+
+SilhouetteMethod ParseSilhouetteMethod(const std::string& name) {
+  if (name == "auto") return SilhouetteMethod::kAuto;
+  if (name == "plate") return SilhouetteMethod::kPlate;
+  if (name == "green") return SilhouetteMethod::kGreen;
+  if (name == "learned") return SilhouetteMethod::kLearned;
+  if (name == "mog2") return SilhouetteMethod::kMog2;
+  throw UsageError("--method: expected auto, plate, green, learned or mog2, got '" + name + "'");
+}
+
+const char* SilhouetteMethodName(SilhouetteMethod method) {
+  switch (method) {
+    case SilhouetteMethod::kAuto: return "auto";
+    case SilhouetteMethod::kPlate: return "plate";
+    case SilhouetteMethod::kGreen: return "green";
+    case SilhouetteMethod::kLearned: return "learned";
+    case SilhouetteMethod::kMog2: return "mog2";
+  }
+  return "?";
+}
+
+void SilhouetteOptions::Check() const {
+  background.Check();
+  chroma.Check();
+  cleanup.Check();
+  auto require = [](bool ok, const char* message) {
+    if (!ok) throw UsageError(std::string("silhouettes: ") + message);
+  };
+  require(empty_fraction >= 0 && empty_fraction < full_fraction && full_fraction <= 1,
+          "need 0 <= empty_fraction < full_fraction <= 1");
+  require(area_jump_fraction > 0 && area_jump_fraction <= 1, "area_jump_fraction must be within (0, 1]");
+  require(border_margin_px >= 0, "border_margin_px must be non-negative");
+  require(threads >= 1 && threads <= 256, "threads must be within [1, 256]");
+}
+
+int SilhouetteSummary::num_flagged() const {
+  int count = 0;
+  for (const MaskSummary& mask : masks) count += mask.flagged() ? 1 : 0;
+  return count;
+}
+
+MaskSummary SummarizeMask(const Image& mask, double previous_fraction, const SilhouetteOptions& options) {
+  MaskSummary summary;
+  const int w = mask.width, h = mask.height;
+  const std::size_t pixels = static_cast<std::size_t>(w) * h;
+  std::size_t count = 0;
+  const std::uint8_t* p = mask.data.data();
+  for (std::size_t i = 0; i < pixels; ++i) count += p[i] != 0;
+  summary.foreground_fraction = pixels ? static_cast<double>(count) / pixels : 0.0;
+  summary.empty = summary.foreground_fraction < options.empty_fraction || count == 0;
+  summary.full = summary.foreground_fraction > options.full_fraction;
+  const int m = std::min({options.border_margin_px, w / 2, h / 2});
+  for (int y = 0; y < h && !summary.touches_border; ++y) {
+    const std::uint8_t* row = p + static_cast<std::size_t>(y) * w;
+    if (y < m || y >= h - m) {
+      summary.touches_border = std::any_of(row, row + w, [](std::uint8_t v) { return v != 0; });
+    } else {
+      for (int x = 0; x < m && !summary.touches_border; ++x) summary.touches_border = row[x] || row[w - 1 - x];
+    }
+  }
+  if (previous_fraction >= 0) {
+    const double larger = std::max(previous_fraction, summary.foreground_fraction);
+    summary.area_jump = larger > options.empty_fraction &&
+                        std::abs(summary.foreground_fraction - previous_fraction) > options.area_jump_fraction * larger;
+  }
+  return summary;
+}
+
+struct SilhouetteExtractor::Mog2 {
+  cv::Ptr<cv::BackgroundSubtractorMOG2> subtractor;
+};
+
+SilhouetteExtractor::~SilhouetteExtractor() = default;
+SilhouetteExtractor::SilhouetteExtractor(SilhouetteExtractor&&) noexcept = default;
+SilhouetteExtractor& SilhouetteExtractor::operator=(SilhouetteExtractor&&) noexcept = default;
+
+namespace {
+
+std::string SizeText(int width, int height) { return std::to_string(width) + "x" + std::to_string(height); }
+
+// Up to `count` frame indices spread evenly over [0, num_frames).
+std::vector<int> EvenSample(int num_frames, int count) {
+  std::vector<int> indices;
+  if (num_frames <= count) {
+    for (int k = 0; k < num_frames; ++k) indices.push_back(k);
+    return indices;
+  }
+  for (int k = 0; k < count; ++k)
+    indices.push_back(static_cast<int>(std::lround((k + 0.5) * num_frames / count - 0.5)));
+  indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
+  return indices;
+}
+
+}  // namespace
+
+SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const std::string& plate_path,
+                                         const FrameReader& read_frame, int num_frames, int first_frame,
+                                         const SilhouetteOptions& options)
+    : options_(options) {
+  options.Check();
+  if (num_frames <= 0 || first_frame < 0 || first_frame >= num_frames)
+    throw UsageError("silhouettes: first frame " + std::to_string(first_frame) + " is outside [0, " +
+                     std::to_string(num_frames) + ")");
+  info_.name = camera_name;
+  const Image first = read_frame(first_frame);
+  width_ = first.width;
+  height_ = first.height;
+
+  SilhouetteMethod method = options.method;
+  const bool has_plate = !plate_path.empty();
+  if (method == SilhouetteMethod::kAuto)
+    method = has_plate ? SilhouetteMethod::kPlate
+                       : LooksLikeGreenScreen(first, options.chroma) ? SilhouetteMethod::kGreen
+                                                                     : SilhouetteMethod::kLearned;
+  if (method == SilhouetteMethod::kLearned && !has_plate && options.method == SilhouetteMethod::kAuto)
+    info_.warnings.push_back("no clean plate and no green screen: using a background learned from the video");
+  if (method == SilhouetteMethod::kPlate && !has_plate) {
+    info_.warnings.push_back("no clean plate (background/" + camera_name +
+                             ".png): falling back to a background learned from the video");
+    method = SilhouetteMethod::kLearned;
+  }
+  info_.method = method;
+
+  Image plate;
+  if (has_plate && (method == SilhouetteMethod::kPlate || method == SilhouetteMethod::kMog2)) {
+    plate = ToRgb8(ReadImage(plate_path));
+    if (plate.width != width_ || plate.height != height_)
+      throw InputError(plate_path, "background plate is " + SizeText(plate.width, plate.height) +
+                                       " but the frames of camera " + camera_name + " are " +
+                                       SizeText(width_, height_));
+    info_.plate_path = plate_path;
+  }
+
+  // Frames for refinement: the first ones of the range.
+  auto frames_from = [&](int start, int count) {
+    std::vector<Image> frames;
+    for (int k = start; k < std::min(num_frames, start + count); ++k)
+      frames.push_back(k == first_frame ? first : read_frame(k));
+    return frames;
+  };
+  // Frames for learning: spread over the whole video, of the frames' size.
+  auto learning_frames = [&]() {
+    std::vector<Image> frames;
+    for (int k : EvenSample(num_frames, options.background.learned_frames)) {
+      Image frame = k == first_frame ? first : read_frame(k);
+      if (frame.width == width_ && frame.height == height_) frames.push_back(std::move(frame));
+    }
+    return frames;
+  };
+
+  switch (method) {
+    case SilhouetteMethod::kPlate: {
+      model_ = BackgroundModel::FromPlates({plate}, options.background, plate_path);
+      if (options.background.refine_frames > 0) {
+        model_.Adapt(frames_from(first_frame, options.background.refine_frames));
+      } else if (options.background.auto_thresholds) {
+        model_.AutoThreshold({first});
+      }
+      break;
+    }
+    case SilhouetteMethod::kLearned: {
+      std::vector<Image> frames = learning_frames();
+      if (frames.size() < 3)
+        throw InputError(camera_name, "cannot learn a background from " + std::to_string(frames.size()) +
+                                          " frame(s); give a clean plate in background/" + camera_name + ".png");
+      info_.warnings.push_back("background learned as the temporal median of " + std::to_string(frames.size()) +
+                               " frames; parts of the actor that never move may be missed");
+      model_ = BackgroundModel::FromFrames(frames, options.background, camera_name);
+      if (options.background.auto_thresholds) {
+        frames.resize(std::min<std::size_t>(frames.size(), 5));
+        model_.AutoThreshold(frames);
+      }
+      break;
+    }
+    case SilhouetteMethod::kGreen:
+      info_.greenness = ChooseGreenness(first, options.chroma);
+      break;
+    case SilhouetteMethod::kMog2: {
+      mog2_ = std::make_unique<Mog2>();
+      mog2_->subtractor = cv::createBackgroundSubtractorMOG2(500, 16.0, true);
+      // OpenCV's subtractor works in BGR order, but only its distances matter: RGB is fine.
+      if (!plate.empty()) {
+        const cv::Mat view = AsCvMat(plate);
+        cv::Mat ignored;
+        for (int k = 0; k < 30; ++k) mog2_->subtractor->apply(view, ignored, k == 0 ? 1.0 : 1.0 / (k + 1));
+      } else {
+        for (const Image& frame : learning_frames()) {
+          cv::Mat ignored;
+          mog2_->subtractor->apply(AsCvMat(frame), ignored, -1);
+        }
+        info_.warnings.push_back("MOG2 without a clean plate: primed with frames of the video");
+      }
+      break;
+    }
+    case SilhouetteMethod::kAuto: break;  // resolved above
+  }
+  if (!model_.empty()) {
+    info_.noise_sigma = model_.noise_sigma();
+    info_.threshold_scale = model_.threshold_scale();
+  }
+}
+
+Image SilhouetteExtractor::Extract(const Image& frame, int frame_index, MaskSummary* summary,
+                                   const std::string& source) {
+  const Image rgb = ToRgb8(frame);
+  if (rgb.width != width_ || rgb.height != height_)
+    throw InputError(source, "frame is " + SizeText(rgb.width, rgb.height) + " but camera " + info_.name +
+                                 " was set up for " + SizeText(width_, height_));
+  Image raw;
+  switch (info_.method) {
+    case SilhouetteMethod::kGreen: raw = ChromaKey(rgb, info_.greenness, options_.chroma); break;
+    case SilhouetteMethod::kMog2: {
+      cv::Mat foreground;
+      mog2_->subtractor->apply(AsCvMat(rgb), foreground, -1);
+      cv::threshold(foreground, foreground, 200, 255, cv::THRESH_BINARY);  // shadows (127) are background
+      raw = ImageFromCvMat(foreground);
+      break;
+    }
+    default: raw = model_.Classify(rgb); break;
+  }
+  MaskCleanupStats stats;
+  Image mask = CleanMask(raw, options_.cleanup, &stats);
+  MaskSummary local = SummarizeMask(mask, previous_fraction_, options_);
+  local.frame = frame_index;
+  local.parts = stats.parts_kept;
+  previous_fraction_ = local.foreground_fraction;
+  if (summary != nullptr) *summary = local;
+  return mask;
+}
+
+SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, int end_frame,
+                                     const SilhouetteOptions& options, const MaskSink& sink,
+                                     const ProgressCallback& progress) {
+  options.Check();
+  if (first_frame < 0 || end_frame > capture.num_frames() || first_frame >= end_frame)
+    throw UsageError("--frames " + std::to_string(first_frame) + ":" + std::to_string(end_frame) +
+                     " is not a non-empty range within 0:" + std::to_string(capture.num_frames()));
+  const int num_cameras = capture.num_cameras();
+  const int num_frames = end_frame - first_frame;
+  SilhouetteSummary summary;
+  summary.cameras.resize(num_cameras);
+  summary.masks.resize(static_cast<std::size_t>(num_cameras) * num_frames);
+
+  std::atomic<int> next_camera{0};
+  std::atomic<bool> failed{false};
+  std::mutex mutex;  // guards progress reports and the first error
+  std::exception_ptr error;
+  std::size_t done = 0;
+  const std::size_t total = static_cast<std::size_t>(num_cameras) * num_frames;
+  auto worker = [&]() {
+    try {
+      for (int c = next_camera++; c < num_cameras && !failed; c = next_camera++) {
+        const Camera& camera = capture.rig().cameras[c];
+        SilhouetteExtractor extractor(
+            camera.name, capture.BackgroundPath(c), [&capture, c](int frame) { return capture.ReadFrame(c, frame); },
+            capture.num_frames(), first_frame, options);
+        summary.cameras[c] = extractor.info();
+        for (int f = first_frame; f < end_frame && !failed; ++f) {
+          const Image image = capture.ReadFrame(c, f);
+          MaskSummary& mask_summary = summary.masks[static_cast<std::size_t>(c) * num_frames + (f - first_frame)];
+          const Image mask = extractor.Extract(image, f, &mask_summary, capture.FramePath(c, f));
+          mask_summary.camera = c;
+          if (sink) sink(c, f, image, mask, mask_summary);
+          std::lock_guard<std::mutex> lock(mutex);
+          ReportProgress(progress, "silhouettes", ++done, total, camera.name + " frame " + std::to_string(f));
+        }
+      }
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!error) error = std::current_exception();
+      failed = true;
+    }
+  };
+  const int threads = std::min(options.threads, num_cameras);
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& thread : pool) thread.join();
+  if (error) std::rethrow_exception(error);
+  for (const CameraSilhouetteInfo& info : summary.cameras)
+    for (const std::string& warning : info.warnings) summary.warnings.push_back(info.name + ": " + warning);
+  return summary;
+}
+
+}  // namespace confluent

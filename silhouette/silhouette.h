@@ -1,0 +1,136 @@
+#pragma once
+// Silhouette extraction for a camera or a whole capture: background model (clean plate,
+// learned, or OpenCV MOG2) or green-screen key, then mask clean-up and per-frame checks.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "calib/capture.h"
+#include "core/image.h"
+#include "core/progress.h"
+#include "silhouette/background_model.h"
+#include "silhouette/chroma_key.h"
+#include "silhouette/mask_cleanup.h"
+
+namespace confluent {
+
+// How foreground is found.
+enum class SilhouetteMethod {
+  kAuto,     // the plate if there is one, else a green key if the frame looks green, else learned
+  kPlate,    // clean plate + Horprasert classifier (falls back to learned, with a warning)
+  kGreen,    // chroma key against a green screen
+  kLearned,  // temporal median background learned from the video + Horprasert classifier
+  kMog2,     // OpenCV's Gaussian-mixture background subtractor (Zivkovic 2004), fed the plate first
+};
+
+// "auto", "plate", "green", "learned", "mog2". Throws UsageError listing the names.
+SilhouetteMethod ParseSilhouetteMethod(const std::string& name);
+const char* SilhouetteMethodName(SilhouetteMethod method);
+
+// Everything that controls silhouette extraction.
+struct SilhouetteOptions {
+  SilhouetteMethod method = SilhouetteMethod::kAuto;
+  BackgroundModelOptions background;
+  ChromaKeyOptions chroma;
+  MaskCleanupOptions cleanup;
+  // Summary flags: a mask is empty below this foreground fraction, full above the other.
+  double empty_fraction = 1e-4;
+  double full_fraction = 0.9;
+  // An area change between consecutive frames of more than this fraction of the larger area
+  // is a sudden jump.
+  double area_jump_fraction = 0.35;
+  // Mask pixels within this distance of the image edge make the actor "touch the border".
+  int border_margin_px = 1;
+  // Worker threads for a capture (cameras are processed in parallel).
+  int threads = 2;
+  // Throws UsageError naming the bad field (also of the nested options).
+  void Check() const;
+};
+
+// Checks of one camera's mask in one frame.
+struct MaskSummary {
+  int camera = 0;
+  int frame = 0;
+  double foreground_fraction = 0;  // of the image's pixels
+  int parts = 0;                   // connected components kept
+  bool empty = false;              // foreground_fraction < empty_fraction
+  bool full = false;               // foreground_fraction > full_fraction
+  bool touches_border = false;     // the actor reaches the image edge
+  bool area_jump = false;          // area changed suddenly since the previous frame
+  bool flagged() const { return empty || full || touches_border || area_jump; }
+};
+
+// How one camera was processed.
+struct CameraSilhouetteInfo {
+  std::string name;
+  SilhouetteMethod method = SilhouetteMethod::kAuto;  // the method actually used
+  std::string plate_path;        // empty when no plate was used
+  double noise_sigma = 0;        // estimated sensor noise, grey levels (background models)
+  double threshold_scale = 1;    // automatic threshold factor (background models)
+  double greenness = 0;          // chroma-key threshold (green)
+  std::vector<std::string> warnings;
+};
+
+// The whole run: per camera, and per camera and frame.
+struct SilhouetteSummary {
+  std::vector<CameraSilhouetteInfo> cameras;
+  std::vector<MaskSummary> masks;      // ordered by camera, then frame
+  std::vector<std::string> warnings;   // all cameras' warnings, prefixed by the camera name
+  int num_flagged() const;
+};
+
+// Extracts the silhouettes of one camera, frame after frame (keeps the model and the previous
+// frame's area, hence a class). Frames are 8-bit RGB.
+class SilhouetteExtractor {
+ public:
+  // Reads a frame of this camera by index; may throw InputError.
+  using FrameReader = std::function<Image(int frame)>;
+
+  // Prepares the camera: resolves the method, loads the plate (`plate_path`, "" when none),
+  // learns or refines the background from frames obtained through `read_frame` (indices in
+  // [0, num_frames)), and picks thresholds. `first_frame` is where processing will start (used
+  // for refinement and detection). Throws InputError naming the plate when it cannot be read
+  // or differs in size from the frames, UsageError for bad options.
+  SilhouetteExtractor(const std::string& camera_name, const std::string& plate_path, const FrameReader& read_frame,
+                      int num_frames, int first_frame, const SilhouetteOptions& options);
+  ~SilhouetteExtractor();
+  SilhouetteExtractor(SilhouetteExtractor&&) noexcept;
+  SilhouetteExtractor& operator=(SilhouetteExtractor&&) noexcept;
+
+  // The cleaned mask (1 channel, 0/255) of `frame`, the frame with index `frame_index`, and
+  // its checks. Throws InputError(`source`) if the frame's size differs from the model's.
+  Image Extract(const Image& frame, int frame_index, MaskSummary* summary, const std::string& source = {});
+
+  const CameraSilhouetteInfo& info() const { return info_; }
+  // The background model (empty for the green key and MOG2).
+  const BackgroundModel& model() const { return model_; }
+
+ private:
+  struct Mog2;
+  SilhouetteOptions options_;
+  CameraSilhouetteInfo info_;
+  BackgroundModel model_;
+  std::unique_ptr<Mog2> mog2_;
+  int width_ = 0;
+  int height_ = 0;
+  double previous_fraction_ = -1;  // < 0 before the first frame
+};
+
+// Computes the summary flags of a cleaned mask; `previous_fraction` < 0 means no previous frame.
+MaskSummary SummarizeMask(const Image& mask, double previous_fraction, const SilhouetteOptions& options);
+
+// Receives each camera's frame and its mask; called from worker threads (must be thread-safe).
+using MaskSink = std::function<void(int camera, int frame, const Image& image, const Image& mask,
+                                    const MaskSummary& summary)>;
+
+// Extracts silhouettes for frames [first_frame, end_frame) of every camera of `capture`,
+// cameras in parallel (options.threads), reporting progress per camera-frame ("silhouettes").
+// Plates are the capture's background/<cam> images. Throws InputError naming the file for bad
+// plates or frames, UsageError for a bad range or options.
+SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, int end_frame,
+                                     const SilhouetteOptions& options, const MaskSink& sink,
+                                     const ProgressCallback& progress = {});
+
+}  // namespace confluent
