@@ -447,14 +447,18 @@ AdjustmentResult Adjust(const CheckerboardSpec& board, const CalibrateOptions& o
                         std::vector<std::array<double, 6>>* camera_blocks, std::map<int, std::array<double, 6>>* boards,
                         bool solve) {
   const std::vector<Eigen::Vector3d> points = board.CornersInBoard();
-  ceres::Problem problem;
+  ceres::HuberLoss loss(options.huber_px);  // shared by every residual block
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
   std::set<int> used_cameras;
   for (const Observation& o : observations) {
     CameraState& camera = (*cameras)[o.camera];
     const ViewState& view = camera.views[o.view];
     for (std::size_t k = 0; k < points.size(); ++k) {
       auto* cost = new ceres::AutoDiffCostFunction<CornerResidual, 2, 9, 6, 6>(new CornerResidual(points[k], view.corners[k]));
-      problem.AddResidualBlock(cost, new ceres::HuberLoss(options.huber_px), camera.intrinsics,
+      problem.AddResidualBlock(cost, &loss, camera.intrinsics,
                                (*camera_blocks)[o.camera].data(), (*boards)[o.frame].data());
     }
     used_cameras.insert(o.camera);

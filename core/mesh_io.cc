@@ -196,11 +196,12 @@ Mesh ReadObj(const std::string& path) {
     const char* line_begin = text.data() + start;
     const void* newline = std::memchr(line_begin, '\n', text.size() - start);
     const std::size_t end = newline ? static_cast<const char*>(newline) - text.data() : text.size();
-    const std::string_view line(line_begin, end - start);
+    std::string_view line(line_begin, end - start);
     start = end + 1;
     ++line_number;
+    line = line.substr(0, line.find('#'));  // comments run to the end of the line
     SplitTokens(line, &tokens);
-    if (tokens.empty() || tokens[0].front() == '#') continue;
+    if (tokens.empty()) continue;
     const std::string_view keyword = tokens[0];
     if (keyword == "v") {
       const std::size_t n = tokens.size() - 1;
@@ -583,6 +584,19 @@ Mesh ReadPly(const std::string& path) {
   }
   if (!have_end) throw InputError(path, "truncated header (no end_header)");
   if (!have_format) throw InputError(path, "header has no format line");
+
+  // Each element needs at least this many bytes, so a corrupt count cannot make us allocate
+  // far more memory than the file could ever fill.
+  std::size_t minimum_body_bytes = 0;
+  for (const auto& element : elements) {
+    std::size_t per_element = 0;
+    for (const auto& property : element.properties)
+      per_element += format == PlyFormat::kAscii ? 1 : PlyTypeSize(property.is_list ? property.count_type : property.type);
+    minimum_body_bytes += per_element * element.count;
+  }
+  if (minimum_body_bytes > text.size() - std::min(position, text.size()))
+    throw InputError(path, "truncated: the header declares more data than the file holds (" +
+                               std::to_string(text.size() - std::min(position, text.size())) + " bytes after the header)");
 
   // --- the layout of the elements we understand
   const PlyElement* vertex_element = nullptr;

@@ -97,8 +97,12 @@ void main() {
 }
 )";
 
-// Each output (distorted) pixel reads its ideal pixel from `ideal_from_pixel` (RG32F, ideal
-// buffer coordinates with pixel centres at integers) and samples the ideal buffers.
+// Each output (distorted) pixel reads its position in the ideal buffer from `ideal_from_pixel`
+// (RG32F, buffer coordinates with sample centres at integers) and interpolates the coverage
+// mask of the 4 surrounding samples bilinearly: the pixel is covered when that is >= 0.5, which
+// places the outline with sub-sample accuracy. A covered pixel takes depth and triangle id from
+// the covered sample with the largest weight and colour from the weighted covered samples, so
+// silhouette, depth, ids and colour stay mutually consistent.
 constexpr const char* kRemapFragmentShader = R"(#version 430 core
 layout(location = 0) out vec4 out_color;
 layout(location = 1) out float out_camera_z;
@@ -109,24 +113,40 @@ uniform sampler2D ideal_color;
 uniform sampler2D ideal_camera_z;
 uniform isampler2D ideal_triangle_id;
 uniform sampler2D ideal_mask;
-uniform ivec2 ideal_size;     // region of the ideal buffers that was rendered
-uniform vec2 texture_size;    // allocated size of the ideal buffers
+uniform ivec2 ideal_size;  // region of the ideal buffers that was rendered
 uniform vec4 background;
 void main() {
   vec2 ideal = texelFetch(ideal_from_pixel, ivec2(gl_FragCoord.xy), 0).xy;
-  ivec2 nearest = ivec2(floor(ideal + 0.5));
-  if (any(lessThan(nearest, ivec2(0))) || any(greaterThanEqual(nearest, ideal_size))) {
+  ivec2 base = ivec2(floor(ideal));
+  vec2 f = ideal - vec2(base);
+  float coverage = 0.0;
+  float best_weight = -1.0;
+  ivec2 best = ivec2(0);
+  vec4 color = vec4(0.0);
+  for (int k = 0; k < 4; ++k) {
+    ivec2 offset = ivec2(k & 1, k >> 1);
+    ivec2 p = base + offset;
+    if (any(lessThan(p, ivec2(0))) || any(greaterThanEqual(p, ideal_size))) continue;
+    float weight = (offset.x == 1 ? f.x : 1.0 - f.x) * (offset.y == 1 ? f.y : 1.0 - f.y);
+    if (texelFetch(ideal_mask, p, 0).r < 0.5) continue;
+    coverage += weight;
+    color += weight * texelFetch(ideal_color, p, 0);
+    if (weight > best_weight) {
+      best_weight = weight;
+      best = p;
+    }
+  }
+  if (coverage < 0.5) {
     out_color = background;
     out_camera_z = 0.0;
     out_triangle_id = -1;
     out_mask = 0.0;
     return;
   }
-  vec2 clamped = clamp(ideal, vec2(0.0), vec2(ideal_size - 1));
-  out_color = texture(ideal_color, (clamped + 0.5) / texture_size);
-  out_camera_z = texelFetch(ideal_camera_z, nearest, 0).r;
-  out_triangle_id = texelFetch(ideal_triangle_id, nearest, 0).r;
-  out_mask = texelFetch(ideal_mask, nearest, 0).r;
+  out_color = color / coverage;
+  out_camera_z = texelFetch(ideal_camera_z, best, 0).r;
+  out_triangle_id = texelFetch(ideal_triangle_id, best, 0).r;
+  out_mask = 1.0;
 }
 )";
 
@@ -667,11 +687,13 @@ struct MeshRenderer::Impl {
       ideal_height = map->ideal_height;
     }
 
+    // The remap needs the coverage mask of the ideal buffer even when no silhouette is asked for.
+    const bool need_mask = request.silhouette || distorted;
     const GLenum draw_buffers[kNumAttachments] = {
         static_cast<GLenum>(request.color ? GL_COLOR_ATTACHMENT0 : GL_NONE),
         static_cast<GLenum>(request.depth ? GL_COLOR_ATTACHMENT1 : GL_NONE),
         static_cast<GLenum>(request.triangle_id ? GL_COLOR_ATTACHMENT2 : GL_NONE),
-        static_cast<GLenum>(request.silhouette ? GL_COLOR_ATTACHMENT3 : GL_NONE)};
+        static_cast<GLenum>(need_mask ? GL_COLOR_ATTACHMENT3 : GL_NONE)};
     Eigen::Vector4f background(1.0f, 1.0f, 1.0f, 1.0f);
     for (int c = 0; c < 3; ++c)
       background[c] = shading.srgb_output ? EncodeSrgb(shading.background[c])
@@ -684,7 +706,7 @@ struct MeshRenderer::Impl {
       if (request.color) glClearBufferfv(GL_COLOR, kColor, background.data());
       if (request.depth) glClearBufferfv(GL_COLOR, kCameraZ, zero);
       if (request.triangle_id) glClearBufferiv(GL_COLOR, kTriangleId, minus_one);
-      if (request.silhouette) glClearBufferfv(GL_COLOR, kMask, zero);
+      if (need_mask) glClearBufferfv(GL_COLOR, kMask, zero);
     };
 
     // Pass 1: rasterise into the ideal pinhole buffer.
@@ -755,8 +777,6 @@ struct MeshRenderer::Impl {
       glBindTexture(GL_TEXTURE_2D, map->texture);
       glUniform1i(glGetUniformLocation(remap_program, "ideal_from_pixel"), 0);
       glUniform2i(glGetUniformLocation(remap_program, "ideal_size"), ideal_width, ideal_height);
-      glUniform2f(glGetUniformLocation(remap_program, "texture_size"), static_cast<float>(direct.width),
-                  static_cast<float>(direct.height));
       glUniform4fv(glGetUniformLocation(remap_program, "background"), 1, background.data());
       glBindVertexArray(empty_vertex_array);
       glDrawArrays(GL_TRIANGLES, 0, 3);

@@ -81,7 +81,9 @@ struct Primitive {
     const Vector3d radii(r.x(), r.y(), cap);
     const double k0 = q.cwiseQuotient(radii).norm();
     const double k1 = q.cwiseQuotient(radii.cwiseProduct(radii)).norm();
-    if (k1 < 1e-12) return -radii.minCoeff();
+    // Inside, (k0 - 1) * min radius is exact at the centre of a round section; outside,
+    // Quilez's k0 (k0 - 1) / k1 bound is accurate near the surface.
+    if (k0 <= 1.0 || k1 < 1e-12) return (k0 - 1.0) * radii.minCoeff();
     return k0 * (k0 - 1.0) / k1;
   }
 
@@ -471,10 +473,23 @@ Eigen::Vector3d Albedo(const Vector3d& p, BodySegment segment, const std::vector
     case BodySegment::kLeftUpperArm:
     case BodySegment::kRightUpperArm: {
       color = shirt;
-      if (OnLine(q.x(), 0.07, 0.009) || OnLine(q.z(), 0.07, 0.009) || OnLine(q.y(), 0.07, 0.009))
+      // Plaid in surface coordinates: around and along the torso (or the arm).
+      double u = 0.0, v = 0.0;
+      if (segment == BodySegment::kUpperTorso) {
+        u = std::atan2(q.x(), q.y() - J[kChest].y() / s) * 0.15;
+        v = q.z();
+      } else {
+        const int shoulder = segment == BodySegment::kLeftUpperArm ? kLShoulder : kRShoulder;
+        const Vector3d axis = (J[shoulder + 1] - J[shoulder]).normalized();
+        const Vector3d d = p - J[shoulder];
+        const Vector3d ref = (Vector3d::UnitY() - axis.y() * axis).normalized();
+        const Vector3d radial = d - d.dot(axis) * axis;
+        u = std::atan2(radial.dot(axis.cross(ref)), radial.dot(ref)) * 0.045;
+        v = d.dot(axis) / s;
+      }
+      if (OnLine(u, 0.07, 0.008) || OnLine(v, 0.07, 0.008))
         color = shirt_line;
-      else if (OnLine(q.x() + 0.035, 0.07, 0.0025) || OnLine(q.z() + 0.035, 0.07, 0.0025) ||
-               OnLine(q.y() + 0.035, 0.07, 0.0025))
+      else if (OnLine(u + 0.035, 0.07, 0.0025) || OnLine(v + 0.035, 0.07, 0.0025))
         color = shirt_thin;
       if (segment != BodySegment::kUpperTorso) {
         // Short sleeves with a hem; skin below.
@@ -712,7 +727,16 @@ StudioActor BuildStudioActor(const StudioActorOptions& options) {
   const double kTrianglesCellSquared = 15.5;  // triangles * cell^2 (m^2) for the default body
   const double girth = (options.torso_girth + options.arm_girth + options.leg_girth) / 3.0;
   const double cell = std::sqrt(kTrianglesCellSquared * s * s * girth / options.target_triangles);
-  Grid grid = SampleField(prims, cell);
+  // Keep every part at least 1.5 cells thick so that coarse meshes stay in one piece.
+  std::vector<Primitive> meshed = prims;
+  for (auto& prim : meshed) {
+    const double r_min = 0.75 * cell;
+    prim.r_a = prim.r_a.cwiseMax(r_min);
+    prim.r_b = prim.r_b.cwiseMax(r_min);
+    prim.cap_a = std::max(prim.cap_a, r_min);
+    prim.cap_b = std::max(prim.cap_b, r_min);
+  }
+  Grid grid = SampleField(meshed, cell);
   Mesh mesh = MarchingTetrahedra(grid);
   std::vector<float>().swap(grid.values);
   KeepLargestComponent(&mesh);

@@ -16,7 +16,7 @@ struct StudioRigOptions {
   double ring_radius_m = 3.8;     // horizontal distance of ring cameras from the target
   double ring_height_m = 1.6;     // camera height; odd ring cameras are ring_height_step_m higher
   double ring_height_step_m = 0.5;
-  double heldout_radius_m = 3.4;
+  double heldout_radius_m = 4.0;
   Eigen::Vector3d target_in_world = Eigen::Vector3d(0.0, 0.0, 1.0);  // every camera looks here
   int width_px = 1024;
   int height_px = 768;

@@ -144,7 +144,7 @@ TEST(MeshIo, ObjPolygonsAreFanTriangulated) {
             "o thing\ng part\ns off\n"
             "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 3 0.5 0\r\nv 2 1 0\n"
             "usemtl none\n"
-            "f 1 2 3 4\n"
+            "f 1 2 3 4 # a trailing comment\n"
             "f  2 5 6 7 3 \n");
   const Mesh mesh = ReadMesh(dir / "poly.obj");
   ASSERT_EQ(mesh.num_faces(), 2 + 3);
@@ -374,6 +374,11 @@ TEST(MeshIoErrors, TruncatedPly) {
     WriteFile(dir / "cut.ply", full.substr(0, cut));
     ExpectInputError(dir / "cut.ply", "truncated");
   }
+  // A corrupt count far beyond the file size fails fast instead of allocating gigabytes.
+  std::string huge = full;
+  huge.replace(huge.find("element vertex 58"), 17, "element vertex 1999999999");
+  WriteFile(dir / "huge.ply", huge);
+  ExpectInputError(dir / "huge.ply", "truncated");
   WriteFile(dir / "header.ply", full.substr(0, full.find("end_header")));
   ExpectInputError(dir / "header.ply", "end_header");
   MeshWriteOptions ascii;
