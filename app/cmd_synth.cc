@@ -16,14 +16,14 @@ int RunSynth(const ParsedArgs& args, const Context& context) {
   const std::string preset = args.get("preset", "default");
   if (preset == "tiny") {
     // A few-second fixture for tests: 4 + 2 cameras, 160 x 120, 10 frames over the whole
-    // performance, about 12K triangles.
+    // performance, about 16K triangles.
     options.rig.num_ring_cameras = 4;
     options.rig.num_heldout_cameras = 2;
     options.rig.width_px = 160;
     options.rig.height_px = 120;
     options.motion.num_frames = 10;
     options.motion.fps = 2.5;
-    options.actor.target_triangles = 12000;
+    options.actor.target_triangles = 16000;
     options.scene.floor_texture_px = 512;
     options.threads = 1;
   } else if (preset != "default") {
@@ -82,7 +82,7 @@ CommandSpec MakeSynthCommand() {
       "camera folder (intri.yml, extri.yml, images/<cam>/<frame>.png, background/<cam>.png, scan.ply) and a\n"
       "ground-truth folder (masks, per-frame meshes, joints.json, skeleton.json, scan.ply).\n"
       "World frame: Z up, floor z = 0, metres; the actor faces +y at rest. --preset tiny makes a small test\n"
-      "fixture (4+2 cameras, 160x120, 10 frames, ~12K triangles). --actor-sequence DIR renders a mesh\n"
+      "fixture (4+2 cameras, 160x120, 10 frames, ~16K triangles). --actor-sequence DIR renders a mesh\n"
       "sequence (one .obj/.ply per frame, fixed topology) instead of the procedural actor.";
   spec.options = {{"out", "CAPTURE", "capture folder to write", false, true},
                   {"gt", "DIR", "ground-truth folder (default: CAPTURE_gt beside CAPTURE)"},

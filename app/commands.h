@@ -13,6 +13,7 @@ CommandSpec MakeCaptureInfoCommand();    // cmd_capture.cc
 CommandSpec MakeMeshInfoCommand();       // cmd_mesh.cc
 CommandSpec MakeRenderInfoCommand();     // cmd_render_info.cc
 CommandSpec MakeSynthCommand();          // cmd_synth.cc
+CommandSpec MakeSilhouettesCommand();    // cmd_silhouettes.cc
 CommandSpec MakeAnimateCommand();        // cmd_animate.cc
 
 }  // namespace confluent::app

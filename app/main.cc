@@ -22,6 +22,7 @@ std::vector<CommandSpec> AllCommands() {
       MakeMeshInfoCommand(),
       MakeRenderInfoCommand(),
       MakeSynthCommand(),
+      MakeSilhouettesCommand(),
       MakeAnimateCommand(),
   };
 }

@@ -121,6 +121,7 @@ void RunFrames(benchmark::State& state, bool labelled) {
   if (summary.used_segment_fields != labelled) state.SkipWithError("unexpected path");
   SetCounters(state, scene);
   state.counters["factor_s"] = motion.setup_summary().factor_seconds;
+  state.counters["poisson_nnz"] = motion.setup_summary().poisson_factor_nonzeros;
 }
 
 void BM_FrameSegments(benchmark::State& state) { RunFrames(state, true); }

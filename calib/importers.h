@@ -24,12 +24,14 @@ CalibFormat ParseCalibFormat(const std::string& name);
 // Options applied after reading, before Check().
 struct ImportOptions {
   // Metres per unit of the file's translations (1 = metres, 0.001 = mm, 0.01 = cm,
-  // 0.1 = dm). 0 means "the format's documented default" (mm for Qualisys and OpenCV XML).
+  // 0.1 = dm). 0 means "the format's documented default" (mm for Qualisys and OpenCV XML,
+  // metres for the others).
   double metres_per_unit = 0.0;
   // Which world axis of the file points up: "+z" (no change), "+y", "-y", "-z", "+x", "-x".
   // The rig is rotated so that this axis becomes +z.
   std::string up_axis = "+z";
-  // Image size for formats that do not store it (plain text); 0 = read from images if found.
+  // Image size for formats that do not store it (plain text: default 1024x768; OpenCV XML and
+  // transforms.json without a size: else read from an image or video beside the file).
   int default_width = 0;
   int default_height = 0;
 };

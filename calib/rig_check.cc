@@ -253,6 +253,18 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
 Image DrawWorldOverlay(const Camera& camera, const Image& image, double grid_half_size_m) {
   Image canvas_image = image;
   cv::Mat canvas = AsCvMat(canvas_image);
+  // The distortion polynomial is only valid inside the field of view: points whose ideal
+  // projection lies well outside the image are not drawn (they would curl back into it).
+  double max_radius = 0;
+  for (const Eigen::Vector2d corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(camera.width, 0),
+                                       Eigen::Vector2d(0, camera.height), Eigen::Vector2d(camera.width, camera.height)})
+    max_radius = std::max(max_radius, camera.Undistort((camera.K.inverse() * corner.homogeneous()).head<2>()).norm());
+  auto project = [&](const Eigen::Vector3d& point, Eigen::Vector2d* pixel) {
+    const Eigen::Vector3d in_camera = camera.PointInCamera(point);
+    if (!(in_camera.z() > 0) || (in_camera.head<2>() / in_camera.z()).norm() > 1.15 * max_radius) return false;
+    *pixel = camera.Project(point);
+    return true;
+  };
   // Draws a world segment as short projected pieces, so distortion bends it correctly.
   auto draw_segment = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const cv::Scalar& color, int thickness) {
     const int pieces = std::max(1, static_cast<int>((b - a).norm() / 0.05));
@@ -260,8 +272,7 @@ Image DrawWorldOverlay(const Camera& camera, const Image& image, double grid_hal
     bool previous_ok = false;
     for (int i = 0; i <= pieces; ++i) {
       Eigen::Vector2d pixel;
-      const bool ok = camera.ProjectChecked(a + (b - a) * (static_cast<double>(i) / pieces), &pixel) &&
-                      pixel.cwiseAbs().maxCoeff() < 1e5;
+      const bool ok = project(a + (b - a) * (static_cast<double>(i) / pieces), &pixel);
       if (ok && previous_ok)
         cv::line(canvas, cv::Point2d(previous.x(), previous.y()), cv::Point2d(pixel.x(), pixel.y()), color, thickness,
                  cv::LINE_AA);

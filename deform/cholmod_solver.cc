@@ -25,6 +25,7 @@ struct SparseCholesky::Impl {
     common.error_handler = nullptr;
     common.supernodal = CHOLMOD_SUPERNODAL;
     common.final_ll = 1;             // keep L L^T (supernodal gives it anyway)
+    common.nmethods = 3;             // try AMD, METIS and nested dissection; keep the sparsest factor
   }
   ~Impl() {
     FreeFactor();
@@ -88,6 +89,16 @@ CholeskyStatus SparseCholesky::Factor(const Eigen::SparseMatrix<double>& matrix)
   }
   if (!ok || s.common.status < CHOLMOD_OK) {
     s.message = "CHOLMOD factorisation failed (status " + std::to_string(s.common.status) + ")";
+    s.FreeFactor();
+    return CholeskyStatus::kNumericalFailure;
+  }
+  // Supernodal factorisation is fastest; for the few right-hand sides of a frame the simplicial
+  // triangular solves (which handle up to 4 columns per sweep, without BLAS calls per
+  // supernode) are faster, so the factor is converted once.
+  s.common.final_ll = 1;
+  if (!cholmod_change_factor(CHOLMOD_REAL, /*to_ll=*/1, /*to_super=*/0, /*to_packed=*/1, /*to_monotonic=*/1,
+                             s.factor, &s.common)) {
+    s.message = "CHOLMOD could not convert the factor (status " + std::to_string(s.common.status) + ")";
     s.FreeFactor();
     return CholeskyStatus::kNumericalFailure;
   }

@@ -17,7 +17,8 @@ namespace confluent {
 
 void ConfluentMotionOptions::Check() const {
   laplacian.Check();
-  if (!(singular_w >= 0.0 && singular_w < 1.0) || max_segment_fields < 1 || !(segment_rigid_tolerance_rad >= 0.0))
+  if (!(singular_w >= 0.0 && singular_w < 1.0) || max_segment_fields < 1 || !(segment_rigid_tolerance_rad >= 0.0) ||
+      !(position_weight >= 0.0))
     std::abort();
 }
 
@@ -71,6 +72,8 @@ struct ConfluentMotion::Impl {
   RowMatrixX3d scan_vertices;
   RowMatrixX3i scan_faces;
   Weights weights;                      // half cotangents per face corner
+  // Per face, for k = 0..2: weights(f, k) * (x_{k+1} - x_{k+2}) in the reference pose.
+  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> face_edges;
   std::vector<int> component_of_vertex, component_of_face;
   int num_components = 0;
   std::vector<int> unreferenced;        // vertices used by no face
@@ -92,6 +95,7 @@ struct ConfluentMotion::Impl {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> segment_fields;
   // Poisson system.
   SparseCholesky poisson;
+  double position_weight = 0.0;  // absolute weight of the soft positional constraints
   // Frame state.
   int frame = 0;
   bool has_previous = false;
@@ -104,7 +108,6 @@ struct ConfluentMotion::Impl {
   int intermediate_frame = -1;
   RowMatrixX3d intermediate_template;
   RowMatrixX4d intermediate_face_rotations;
-  RowMatrixX4d face_rotations;
 
   std::vector<Eigen::Quaterniond> ConstraintRotations(const RowMatrixX3d& from, const RowMatrixX3d& to,
                                                       std::vector<int>* degenerate) const {
@@ -232,6 +235,12 @@ ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_referenc
 
   // Laplacian; vertices used by no face get a unit diagonal so both systems stay definite.
   s.weights = CotangentWeights(s.scan_vertices, s.scan_faces, options.laplacian);
+  s.face_edges.resize(scan.num_faces(), 9);
+  for (int f = 0; f < scan.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k)
+      s.face_edges.block<1, 3>(f, 3 * k) =
+          s.weights(f, k) * (s.scan_vertices.row(s.scan_faces(f, (k + 1) % 3)) -
+                             s.scan_vertices.row(s.scan_faces(f, (k + 2) % 3)));
   Eigen::SparseMatrix<double> laplacian = AssembleLaplacian(n, s.scan_faces, s.weights);
   {
     std::vector<Eigen::Triplet<double>> diagonal;
@@ -319,17 +328,26 @@ ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_referenc
     }
   }
 
-  // Poisson system: L with one vertex per component pinned (the right-hand side sums to zero
-  // over each component, so the pin only fixes the translation gauge).
+  // Poisson system: L plus the soft positional constraints, or, without them, L with one vertex
+  // per component pinned (the right-hand side sums to zero over each component, so the pin only
+  // fixes the translation gauge).
   {
-    std::vector<int> pinned(s.num_components, -1);
-    for (int v = 0; v < n; ++v) {
-      const int c = s.component_of_vertex[v];
-      if (c >= 0 && pinned[c] < 0) pinned[c] = v;
-    }
     const double mean_diagonal = laplacian.diagonal().mean();
     std::vector<Eigen::Triplet<double>> pins;
-    for (int v : pinned) pins.emplace_back(v, v, mean_diagonal);
+    if (options.position_weight > 0.0) {
+      s.position_weight = options.position_weight * mean_diagonal;
+      for (int k = 0; k < m; ++k)
+        for (int c = 0; c < 3; ++c)
+          pins.emplace_back(s.scan_faces(s.pairs[k].scan_triangle, c), s.scan_faces(s.pairs[k].scan_triangle, c),
+                            s.position_weight * s.pairs[k].weight);
+    } else {
+      std::vector<int> pinned(s.num_components, -1);
+      for (int v = 0; v < n; ++v) {
+        const int c = s.component_of_vertex[v];
+        if (c >= 0 && pinned[c] < 0) pinned[c] = v;
+      }
+      for (int v : pinned) pins.emplace_back(v, v, mean_diagonal);
+    }
     Eigen::SparseMatrix<double> pin(n, n);
     pin.setFromTriplets(pins.begin(), pins.end());
     if (s.poisson.Factor(laplacian + pin) != CholeskyStatus::kOk)
@@ -346,7 +364,7 @@ ConfluentMotion& ConfluentMotion::operator=(ConfluentMotion&&) noexcept = defaul
 
 const ConfluentMotionSetupSummary& ConfluentMotion::setup_summary() const { return impl_->setup; }
 const Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>& ConfluentMotion::face_rotations() const {
-  return impl_->face_rotations;
+  return impl_->previous_face_rotations;
 }
 
 void ConfluentMotion::Reset() {
@@ -472,31 +490,27 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
   // intermediate reference's rotation), then the right-hand side U_reduced: the cotangent
   // Laplacian of the fragmented mesh of rotated reference triangles, summed per vertex.
   RowMatrixX4d face_q(num_faces, 4);
-  Eigen::Matrix<double, Eigen::Dynamic, 3> rhs = Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(n, 3);
+  RowMatrixX3d rhs = RowMatrixX3d::Zero(n, 3);
   int vanishing = 0;
   for (int f = 0; f < num_faces; ++f) {
-    Eigen::Vector4d sum = (vertex_q.row(s.scan_faces(f, 0)) + vertex_q.row(s.scan_faces(f, 1)) +
-                           vertex_q.row(s.scan_faces(f, 2))).transpose();
+    const int* corner = &s.scan_faces(f, 0);
+    Eigen::Vector4d sum = (vertex_q.row(corner[0]) + vertex_q.row(corner[1]) + vertex_q.row(corner[2])).transpose();
     const double norm = sum.norm();
-    Eigen::Quaterniond rotation;
-    if (norm > 1e-9 && std::isfinite(norm)) {
-      rotation = ToQuaternion(sum / norm);
-    } else {
+    const bool valid = norm > 1e-9 && std::isfinite(norm);
+    Eigen::Quaterniond rotation = valid ? ToQuaternion(sum / norm) : Eigen::Quaterniond::Identity();
+    if (!valid) {
       ++vanishing;
-      rotation = Eigen::Quaterniond::Identity();
+      if (s.has_previous) rotation = ToQuaternion(s.previous_face_rotations.row(f).transpose());
+    } else if (reference >= 0) {
+      rotation = (rotation * ToQuaternion(s.intermediate_face_rotations.row(f).transpose())).normalized();
     }
-    if (reference >= 0) rotation = rotation * ToQuaternion(s.intermediate_face_rotations.row(f).transpose());
-    if (!(norm > 1e-9 && std::isfinite(norm)) && s.has_previous)
-      rotation = ToQuaternion(s.previous_face_rotations.row(f).transpose());
-    rotation.normalize();
     face_q.row(f) = ToVector(rotation).transpose();
     const Eigen::Matrix3d r = rotation.toRotationMatrix();
     for (int k = 0; k < 3; ++k) {
-      const int i = s.scan_faces(f, (k + 1) % 3), j = s.scan_faces(f, (k + 2) % 3);
-      const Eigen::Vector3d edge = r * (s.scan_vertices.row(i) - s.scan_vertices.row(j)).transpose();
-      const Eigen::Vector3d flux = s.weights(f, k) * edge;
-      rhs.row(i) += flux.transpose();
-      rhs.row(j) -= flux.transpose();
+      // Flux of edge (k+1, k+2): half-cotangent weight times the rotated reference edge.
+      const Eigen::Vector3d flux = r * Eigen::Map<const Eigen::Vector3d>(&s.face_edges(f, 3 * k));
+      rhs.row(corner[(k + 1) % 3]) += flux.transpose();
+      rhs.row(corner[(k + 2) % 3]) -= flux.transpose();
     }
   }
   if (vanishing > 0)
@@ -504,21 +518,33 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
                                " faces got a vanishing interpolated quaternion (kept their previous rotation)");
   for (int v : s.unreferenced) rhs.row(v).setZero();
 
-  // 6. Solve L x = U_reduced with the factor computed once.
+  // 6. Where the template's triangles carry the correspondence triangles: the scan-template
+  // offset rotates with the template triangle.
+  std::vector<Eigen::Vector3d> target(m), template_now(m);
+  for (int k = 0; k < m; ++k) {
+    template_now[k] =
+        Corners(template_vertices, s.template_faces, s.pairs[k].template_triangle).colwise().mean().transpose();
+    target[k] = template_now[k] + full[k] * (s.scan_centroid_ref[k] - s.template_centroid_ref[k]);
+  }
+  if (s.position_weight > 0.0)
+    for (int k = 0; k < m; ++k)
+      for (int c = 0; c < 3; ++c) {
+        const int v = s.scan_faces(s.pairs[k].scan_triangle, c);
+        const Eigen::Vector3d corner_target =
+            template_now[k] + full[k] * (s.scan_vertices.row(v).transpose() - s.template_centroid_ref[k]);
+        rhs.row(v) += (s.position_weight * s.pairs[k].weight) * corner_target.transpose();
+      }
+
+  // 7. Solve L x = U_reduced (plus the positional terms) with the factor computed once.
   const Eigen::MatrixXd solved = s.poisson.Solve(Eigen::MatrixXd(rhs));
   RowMatrixX3d result = solved;
 
-  // 7. Global position: per component, the translation that best places the correspondence
-  // centroids where the template's triangles carry them (the scan-template offset rotates with
-  // the template triangle).
+  // 8. Global position: per component, the translation that best places the correspondence
+  // centroids at their targets (zero up to round-off with positional constraints).
   std::vector<Eigen::Vector3d> shift(s.num_components, Eigen::Vector3d::Zero());
   std::vector<double> weight(s.num_components, 0.0);
-  std::vector<Eigen::Vector3d> target(m);
   Eigen::Vector3d mean_offset = Eigen::Vector3d::Zero();
   for (int k = 0; k < m; ++k) {
-    const Eigen::Vector3d template_now =
-        Corners(template_vertices, s.template_faces, s.pairs[k].template_triangle).colwise().mean().transpose();
-    target[k] = template_now + full[k] * (s.scan_centroid_ref[k] - s.template_centroid_ref[k]);
     const Eigen::Vector3d scan_now = Corners(result, s.scan_faces, s.pairs[k].scan_triangle).colwise().mean().transpose();
     const int c = s.component_of_face[s.pairs[k].scan_triangle];
     shift[c] += s.pairs[k].weight * (target[k] - scan_now);
@@ -545,14 +571,13 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
       if (!result.row(v).allFinite()) result.row(v) = s.scan_vertices.row(v);
   }
 
-  // 8. State for the next frame.
+  // 9. State for the next frame.
   s.has_previous = true;
   s.previous_template = template_vertices;
-  s.previous_face_rotations = face_q;
   s.previous_constraints = q;
   s.previous_full = full_q;
   s.previous_reference = reference;
-  s.face_rotations = face_q;
+  s.previous_face_rotations.swap(face_q);
   ++s.frame;
   if (summary_out) *summary_out = summary;
   return result;

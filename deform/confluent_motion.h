@@ -17,6 +17,13 @@ namespace confluent {
 // Options of ConfluentMotion.
 struct ConfluentMotionOptions {
   CotanLaplacianOptions laplacian;      // weights of both systems (harmonic and Poisson)
+  // Soft positional constraints on the corners of the scan's correspondence triangles, relative
+  // to the mean diagonal of the Laplacian: each corner is drawn towards where its template
+  // triangle carries it (the template triangle's current centroid plus its rotation applied to
+  // the reference scan-template offset). They stop small rotation errors from accumulating
+  // along limbs. 0 gives the report's formulation: the Poisson solve fixes the shape and only a
+  // translation per component is fitted to the correspondences.
+  double position_weight = 1.0;
   // A constraint quaternion with |w| below this is near a 180-degree rotation (report
   // section 4.3); 0.25 is a rotation of about 151 degrees.
   double singular_w = 0.25;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <sstream>
 #include <utility>
@@ -360,6 +361,7 @@ struct MeshRenderer::Impl {
   unsigned long long clock = 0;
   int max_size = 0;
   int total_faces = 0;
+  std::vector<std::uint8_t> readback;  // RGBA staging for the colour readback
 
   explicit Impl(const MeshRendererOptions& opts) : options(opts), context(opts.context) {
     color_program = LinkProgram(kMeshVertexShader, std::string("#version 430 core\n#define WITH_COLOR\n") +
@@ -717,7 +719,15 @@ struct MeshRenderer::Impl {
     glClearBufferfv(GL_DEPTH, 0, &far_depth);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
-    glDisable(GL_CULL_FACE);
+    if (request.cull_back_faces) {
+      // Faces are counter-clockwise seen from outside; the y flip in the projection makes them
+      // clockwise in GL window coordinates.
+      glEnable(GL_CULL_FACE);
+      glFrontFace(GL_CW);
+      glCullFace(GL_BACK);
+    } else {
+      glDisable(GL_CULL_FACE);
+    }
     glDisable(GL_BLEND);
 
     Eigen::Matrix4d cam_from_world = Eigen::Matrix4d::Identity();
@@ -791,8 +801,15 @@ struct MeshRenderer::Impl {
       glReadPixels(0, 0, w, h, format, type, data);
     };
     if (request.color) {
+      // RGBA is the driver's fast readback path (no per-pixel format conversion); drop alpha here.
       result.color = Image(w, h, 3, shading.color_type);
-      read(kColor, GL_RGB, float_color ? GL_FLOAT : GL_UNSIGNED_BYTE, result.color.data.data());
+      const std::size_t pixels = static_cast<std::size_t>(w) * h;
+      const std::size_t value_bytes = BytesPerChannel(shading.color_type);
+      readback.resize(pixels * 4 * value_bytes);
+      read(kColor, GL_RGBA, float_color ? GL_FLOAT : GL_UNSIGNED_BYTE, readback.data());
+      std::uint8_t* out = result.color.data.data();
+      for (std::size_t i = 0; i < pixels; ++i)
+        std::memcpy(out + 3 * value_bytes * i, readback.data() + 4 * value_bytes * i, 3 * value_bytes);
     }
     if (request.depth) {
       result.depth = Image(w, h, 1, PixelType::kFloat32);

@@ -86,6 +86,10 @@ struct RenderRequest {
   bool silhouette = false;   // uint8 mask, 255 where any drawn mesh covers the pixel, else 0
   bool triangle_id = false;  // int32 triangle id, -1 for background (see MeshRenderer::AddMesh)
   std::vector<int> meshes;   // handles of the meshes to draw; empty = all meshes
+  // Skip faces seen from behind (faces are counter-clockwise seen from outside, core/mesh.h).
+  // Same images for closed, consistently oriented meshes, and faster; wrong for open or
+  // inconsistently oriented ones.
+  bool cull_back_faces = false;
   ShadingOptions shading;
 };
 

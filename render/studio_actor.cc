@@ -451,10 +451,10 @@ Eigen::Vector3d Albedo(const Vector3d& p, BodySegment segment, const std::vector
     case BodySegment::kHead: {
       const Vector3d c = (J[kHead] / s) + Vector3d(0.0, 0.01, 0.085);
       const Vector3d d = q - c;
-      const bool face = d.y() > -0.005 && d.z() < 0.04 - 0.25 * std::max(0.0, -d.y());
+      const bool face = d.y() > 0.0 && d.z() < 0.03 - 0.3 * std::max(0.0, -d.y());
       color = skin;
-      if (!face && d.z() > -0.075) color = hair;
-      if (d.z() > 0.045 + 0.1 * std::max(0.0, d.y() - 0.04)) color = hair;
+      if (!face && d.z() > -0.075 + 0.3 * std::max(0.0, d.y())) color = hair;
+      if (d.z() > 0.032 + 0.15 * std::max(0.0, d.y() - 0.05)) color = hair;
       if (d.y() > 0.05) {
         for (double side : {-1.0, 1.0}) {
           const double ex = d.x() - side * 0.032, ez = d.z() - 0.008;
@@ -727,10 +727,10 @@ StudioActor BuildStudioActor(const StudioActorOptions& options) {
   const double kTrianglesCellSquared = 15.5;  // triangles * cell^2 (m^2) for the default body
   const double girth = (options.torso_girth + options.arm_girth + options.leg_girth) / 3.0;
   const double cell = std::sqrt(kTrianglesCellSquared * s * s * girth / options.target_triangles);
-  // Keep every part at least 1.5 cells thick so that coarse meshes stay in one piece.
+  // Keep every part at least 2 cells thick so that coarse meshes stay in one piece.
   std::vector<Primitive> meshed = prims;
   for (auto& prim : meshed) {
-    const double r_min = 0.75 * cell;
+    const double r_min = cell;
     prim.r_a = prim.r_a.cwiseMax(r_min);
     prim.r_b = prim.r_b.cwiseMax(r_min);
     prim.cap_a = std::max(prim.cap_a, r_min);

@@ -227,7 +227,7 @@ FloorShadow ComputeFloorShadow(const RowMatrixX3d& vertices, const FloorShadowOp
   shadow.factor.resize(density.size());
   for (std::size_t k = 0; k < density.size(); ++k) {
     const double coverage = density[k] / (per_area * cell_area);  // body area above per floor area
-    shadow.factor[k] = static_cast<float>(1.0 - options.strength * (1.0 - std::exp(-0.7 * coverage)));
+    shadow.factor[k] = static_cast<float>(1.0 - options.strength * (1.0 - std::exp(-2.0 * coverage)));
   }
   return shadow;
 }

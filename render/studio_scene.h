@@ -34,7 +34,7 @@ std::vector<TexturedMesh> MakeStudioScene(const StudioSceneOptions& options = {}
 struct FloorShadowOptions {
   double half_size_m = 1.8;   // grid spans [-half_size, half_size]^2
   double cell_m = 0.01;
-  double blur_m = 0.05;       // box-blur radius (three passes, about Gaussian)
+  double blur_m = 0.10;       // box-blur radius (three passes, about Gaussian)
   double strength = 0.55;     // darkening where the body is dense and close to the floor
   double falloff_m = 0.5;     // a point at height h contributes exp(-h / falloff)
   // Horizontal shift per metre of height (the light's direction; a point at height h darkens

@@ -1,9 +1,9 @@
 #include "silhouette/chroma_key.h"
 
 #include <algorithm>
-#include <array>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 
@@ -16,6 +16,7 @@ void ChromaKeyOptions::Check() const {
   require(greenness >= 0 && greenness < 1, "greenness must be within [0, 1) (0 = automatic)");
   require(auto_min_greenness > 0 && auto_min_greenness <= auto_max_greenness && auto_max_greenness < 1,
           "auto greenness range must satisfy 0 < min <= max < 1");
+  require(screen_fraction > 0 && screen_fraction < 1, "screen_fraction must be within (0, 1)");
   require(min_margin >= 0 && min_margin <= 100, "min_margin must be within [0, 100] grey levels");
   require(detect_fraction > 0 && detect_fraction <= 1, "detect_fraction must be within (0, 1]");
 }
@@ -31,37 +32,20 @@ void CheckFrame(const Image& frame) {
 double ChooseGreenness(const Image& frame, const ChromaKeyOptions& options) {
   if (options.greenness > 0) return options.greenness;
   CheckFrame(frame);
-  // Histogram of greenness in [-1, 1] over pixels bright enough to have a colour.
-  constexpr int kBins = 200;
-  std::array<double, kBins> histogram{};
+  // Median greenness (g - max(r, b)) / g of the clearly green pixels: the screen's own
+  // greenness, which folds and shading do not change (it is a ratio).
+  std::vector<float> screen;
   const std::size_t pixels = static_cast<std::size_t>(frame.width) * frame.height;
   const std::uint8_t* p = frame.data.data();
-  double total = 0;
   for (std::size_t i = 0; i < pixels; i += 3) {
     const int r = p[3 * i], g = p[3 * i + 1], b = p[3 * i + 2];
-    if (g < 20) continue;
-    const double q = std::clamp(static_cast<double>(g - std::max(r, b)) / g, -1.0, 0.999);
-    histogram[static_cast<int>((q + 1.0) * 0.5 * kBins)] += 1;
-    total += 1;
+    if (g > 30 && (g - std::max(r, b)) * 5 > g) screen.push_back(static_cast<float>(g - std::max(r, b)) / g);
   }
-  double threshold = 0.5 * (options.auto_min_greenness + options.auto_max_greenness);
-  if (total > 0) {
-    // Otsu: maximise the between-class variance.
-    double sum_all = 0;
-    for (int k = 0; k < kBins; ++k) sum_all += k * histogram[k];
-    double weight_low = 0, sum_low = 0, best = -1;
-    for (int k = 0; k + 1 < kBins; ++k) {
-      weight_low += histogram[k];
-      sum_low += k * histogram[k];
-      const double weight_high = total - weight_low;
-      if (weight_low <= 0 || weight_high <= 0) continue;
-      const double mean_low = sum_low / weight_low, mean_high = (sum_all - sum_low) / weight_high;
-      const double between = weight_low * weight_high * (mean_low - mean_high) * (mean_low - mean_high);
-      if (between > best) {
-        best = between;
-        threshold = (k + 1.0) / kBins * 2.0 - 1.0;
-      }
-    }
+  double threshold = options.auto_max_greenness;
+  if (!screen.empty()) {
+    auto middle = screen.begin() + screen.size() / 2;
+    std::nth_element(screen.begin(), middle, screen.end());
+    threshold = options.screen_fraction * *middle;
   }
   return std::clamp(threshold, options.auto_min_greenness, options.auto_max_greenness);
 }

@@ -10,9 +10,11 @@ namespace confluent {
 
 // Settings of ChromaKey.
 struct ChromaKeyOptions {
-  // Screen when (g - max(r, b)) > greenness * g + min_margin. 0 = choose per camera by Otsu's
-  // method on the greenness histogram, within [auto_min_greenness, auto_max_greenness].
+  // Screen when (g - max(r, b)) > greenness * g + min_margin. 0 = choose per camera as
+  // screen_fraction times the screen's median greenness, within [auto_min_greenness,
+  // auto_max_greenness].
   double greenness = 0.0;
+  double screen_fraction = 0.4;
   double auto_min_greenness = 0.08;
   double auto_max_greenness = 0.3;
   // Extra margin in grey levels, so that noise on dark grey pixels is not taken for screen.
@@ -24,8 +26,9 @@ struct ChromaKeyOptions {
   void Check() const;
 };
 
-// Greenness threshold chosen by Otsu's method on the pixels' (g - max(r, b)) / g of an 8-bit
-// RGB frame, clamped to the options' auto range (or options.greenness when it is set).
+// Greenness threshold for an 8-bit RGB frame: options.greenness when set, else a fraction of
+// the median greenness (g - max(r, b)) / g of its clearly green pixels, clamped to the options'
+// auto range.
 double ChooseGreenness(const Image& frame, const ChromaKeyOptions& options);
 
 // Foreground mask (0/255, 1 channel) of an 8-bit RGB frame keyed against a green screen with

@@ -18,6 +18,7 @@ void MaskCleanupOptions::Check() const {
   require(work_scale == 1 || work_scale == 2 || work_scale == 4, "work_scale must be 1, 2 or 4");
   require(open_radius_px >= 0 && open_radius_px <= 20, "open_radius_px must be within [0, 20]");
   require(close_radius_px >= 0 && close_radius_px <= 20, "close_radius_px must be within [0, 20]");
+  require(connect_radius_px >= 0 && connect_radius_px <= 20, "connect_radius_px must be within [0, 20]");
   require(min_part_fraction >= 0 && min_part_fraction <= 1, "min_part_fraction must be within [0, 1]");
   require(max_part_distance_fraction >= 0, "max_part_distance_fraction must be non-negative");
   require(max_hole_fraction >= 0 && max_hole_fraction <= 1, "max_hole_fraction must be within [0, 1]");
@@ -58,9 +59,17 @@ Image CleanMask(const Image& raw, const MaskCleanupOptions& options, MaskCleanup
     cv::morphologyEx(work, work, cv::MORPH_CLOSE, Disk(options.close_radius_px), cv::Point(-1, -1), 1,
                      cv::BORDER_CONSTANT, cv::Scalar(0));
 
-  // Keep the largest component and the sizeable parts near it.
+  // Keep the largest component and the sizeable parts near it; pieces closer than the
+  // connection radius count as one component.
+  cv::Mat connected;  // a separate buffer: `work` keeps the shape
+  if (options.connect_radius_px > 0) {
+    cv::morphologyEx(work, connected, cv::MORPH_CLOSE, Disk(options.connect_radius_px), cv::Point(-1, -1), 1,
+                     cv::BORDER_CONSTANT, cv::Scalar(0));
+  } else {
+    connected = work;
+  }
   cv::Mat labels, comp_stats, centroids;
-  const int count = cv::connectedComponentsWithStats(work, labels, comp_stats, centroids, 8, CV_32S);
+  const int count = cv::connectedComponentsWithStats(connected, labels, comp_stats, centroids, 8, CV_32S);
   Image result(raw.width, raw.height, 1);
   if (count <= 1) return result;  // empty
   int largest = 1;
@@ -79,7 +88,6 @@ Image CleanMask(const Image& raw, const MaskCleanupOptions& options, MaskCleanup
     const double area = comp_stats.at<int>(k, cv::CC_STAT_AREA);
     if (k == largest || (area >= options.min_part_fraction * main_area && BoxGap(box(k), main_box) <= max_gap)) {
       keep[k] = 255;
-      kept_area += area;
       ++out_stats.parts_kept;
     } else {
       ++out_stats.parts_dropped;
@@ -88,8 +96,12 @@ Image CleanMask(const Image& raw, const MaskCleanupOptions& options, MaskCleanup
   cv::Mat kept(work.size(), CV_8U);
   for (int y = 0; y < work.rows; ++y) {
     const int* label_row = labels.ptr<int>(y);
+    const std::uint8_t* work_row = work.ptr<std::uint8_t>(y);
     std::uint8_t* row = kept.ptr<std::uint8_t>(y);
-    for (int x = 0; x < work.cols; ++x) row[x] = keep[label_row[x]];
+    for (int x = 0; x < work.cols; ++x) {
+      row[x] = keep[label_row[x]] & work_row[x];
+      kept_area += row[x] != 0;
+    }
   }
 
   // Fill the small enclosed holes (4-connected background not reaching the border).

@@ -12,9 +12,14 @@ struct MaskCleanupOptions {
   // Components, opening, closing and holes are computed at 1/work_scale of the resolution
   // (1, 2 or 4); the boundary band is taken from the full-resolution mask.
   int work_scale = 2;
-  // Opening radius (removes speckle) and closing radius (bridges small gaps), in work pixels.
+  // Opening radius (removes speckle), in work pixels.
   int open_radius_px = 1;
-  int close_radius_px = 2;
+  // Closing radius applied to the mask's shape (fills cracks, but also concave corners such as
+  // armpits), in work pixels; 0 = none.
+  int close_radius_px = 0;
+  // Closing radius used only to decide which pieces belong together (the mask is not changed
+  // by it), in work pixels.
+  int connect_radius_px = 3;
   // Components smaller than this fraction of the largest one are dropped as speckle...
   double min_part_fraction = 0.01;
   // ...and so are those farther than this fraction of the largest component's bounding-box

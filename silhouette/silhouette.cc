@@ -112,6 +112,13 @@ std::vector<int> EvenSample(int num_frames, int count) {
 SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const std::string& plate_path,
                                          const FrameReader& read_frame, int num_frames, int first_frame,
                                          const SilhouetteOptions& options)
+    : SilhouetteExtractor(camera_name,
+                          plate_path.empty() ? std::vector<Image>{} : std::vector<Image>{ToRgb8(ReadImage(plate_path))},
+                          plate_path, read_frame, num_frames, first_frame, options) {}
+
+SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const std::vector<Image>& plates,
+                                         const std::string& plate_source, const FrameReader& read_frame,
+                                         int num_frames, int first_frame, const SilhouetteOptions& options)
     : options_(options) {
   options.Check();
   if (num_frames <= 0 || first_frame < 0 || first_frame >= num_frames)
@@ -123,7 +130,7 @@ SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const s
   height_ = first.height;
 
   SilhouetteMethod method = options.method;
-  const bool has_plate = !plate_path.empty();
+  const bool has_plate = !plates.empty();
   if (method == SilhouetteMethod::kAuto)
     method = has_plate ? SilhouetteMethod::kPlate
                        : LooksLikeGreenScreen(first, options.chroma) ? SilhouetteMethod::kGreen
@@ -137,14 +144,13 @@ SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const s
   }
   info_.method = method;
 
-  Image plate;
   if (has_plate && (method == SilhouetteMethod::kPlate || method == SilhouetteMethod::kMog2)) {
-    plate = ToRgb8(ReadImage(plate_path));
-    if (plate.width != width_ || plate.height != height_)
-      throw InputError(plate_path, "background plate is " + SizeText(plate.width, plate.height) +
-                                       " but the frames of camera " + camera_name + " are " +
-                                       SizeText(width_, height_));
-    info_.plate_path = plate_path;
+    for (const Image& plate : plates)
+      if (plate.width != width_ || plate.height != height_)
+        throw InputError(plate_source, "background plate is " + SizeText(plate.width, plate.height) +
+                                           " but the frames of camera " + camera_name + " are " +
+                                           SizeText(width_, height_));
+    info_.plate_path = plate_source;
   }
 
   // Frames for refinement: the first ones of the range.
@@ -166,7 +172,9 @@ SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const s
 
   switch (method) {
     case SilhouetteMethod::kPlate: {
-      model_ = BackgroundModel::FromPlates({plate}, options.background, plate_path);
+      std::vector<Image> rgb_plates;
+      for (const Image& plate : plates) rgb_plates.push_back(ToRgb8(plate));
+      model_ = BackgroundModel::FromPlates(rgb_plates, options.background, plate_source);
       if (options.background.refine_frames > 0) {
         model_.Adapt(frames_from(first_frame, options.background.refine_frames));
       } else if (options.background.auto_thresholds) {
@@ -195,10 +203,12 @@ SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const s
       mog2_ = std::make_unique<Mog2>();
       mog2_->subtractor = cv::createBackgroundSubtractorMOG2(500, 16.0, true);
       // OpenCV's subtractor works in BGR order, but only its distances matter: RGB is fine.
-      if (!plate.empty()) {
-        const cv::Mat view = AsCvMat(plate);
+      if (has_plate) {
         cv::Mat ignored;
-        for (int k = 0; k < 30; ++k) mog2_->subtractor->apply(view, ignored, k == 0 ? 1.0 : 1.0 / (k + 1));
+        for (int k = 0; k < std::max<int>(30, plates.size()); ++k) {
+          const Image plate = ToRgb8(plates[k % plates.size()]);
+          mog2_->subtractor->apply(AsCvMat(plate), ignored, k == 0 ? 1.0 : 1.0 / (k + 1));
+        }
       } else {
         for (const Image& frame : learning_frames()) {
           cv::Mat ignored;

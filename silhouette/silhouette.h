@@ -95,6 +95,11 @@ class SilhouetteExtractor {
   // or differs in size from the frames, UsageError for bad options.
   SilhouetteExtractor(const std::string& camera_name, const std::string& plate_path, const FrameReader& read_frame,
                       int num_frames, int first_frame, const SilhouetteOptions& options);
+  // As above with the plate(s) given as images (several: per-pixel statistics over them, e.g.
+  // frames of a background video); `plate_source` names them in errors and in info().
+  SilhouetteExtractor(const std::string& camera_name, const std::vector<Image>& plates,
+                      const std::string& plate_source, const FrameReader& read_frame, int num_frames,
+                      int first_frame, const SilhouetteOptions& options);
   ~SilhouetteExtractor();
   SilhouetteExtractor(SilhouetteExtractor&&) noexcept;
   SilhouetteExtractor& operator=(SilhouetteExtractor&&) noexcept;

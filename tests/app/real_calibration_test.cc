@@ -1,6 +1,7 @@
 // Real data (../shared/data, skipped when absent): the Tsinghua 20-camera dome imported from
 // its plain-text calibration must pass `calib check`, and a visual hull from 18 cameras must
-// match the real silhouettes of the 2 others.
+// match the real silhouettes of the 2 others. (The ground-truth masks of cam15 and cam17 also
+// mark the tent ceiling as foreground, so those two are not used as held-out cameras.)
 
 #include <gtest/gtest.h>
 
@@ -32,14 +33,14 @@ TEST(RealCalibration, TsinghuaImportPassesCheckAndHullMatchesHeldOutMasks) {
     fs::create_symlink(fs::path(data) / image, fs::path(capture) / "images" / camera / "000000.png");
     fs::create_symlink(fs::path(data) / mask, fs::path(capture) / "masks" / camera / "000000.png");
   }
-  auto check = testing::RunConfluent({"calib", "check", capture, "--heldout", "cam07", "--heldout", "cam15",
+  auto check = testing::RunConfluent({"calib", "check", capture, "--heldout", "cam03", "--heldout", "cam12",
                                       "--min-iou", "0.85", "--hull-resolution", "200", "--out", dir / "check"});
   std::printf("%s\n", check.stdout_text.c_str());
   EXPECT_EQ(check.exit_code, 0) << check.stderr_text;
   std::smatch match;
   std::string text = check.stdout_text;
   int scored = 0;
-  for (const std::regex iou("(cam07|cam15) +IoU ([0-9.]+)"); std::regex_search(text, match, iou);
+  for (const std::regex iou("(cam03|cam12) +IoU ([0-9.]+)"); std::regex_search(text, match, iou);
        text = match.suffix()) {
     EXPECT_GT(std::stod(match[2]), 0.85) << match[1];
     ++scored;

@@ -505,6 +505,32 @@ TEST(MeshRenderer, SeveralMeshesAndIdOffsets) {
   EXPECT_THROW(renderer.Render(camera, request), UsageError);
 }
 
+TEST(MeshRenderer, BackFaceCullingKeepsClosedMeshImagesIdentical) {
+  for (bool with_distortion : {false, true}) {
+    MeshRenderer renderer;
+    const Camera camera = TestCamera(with_distortion);
+    renderer.AddMesh(MakeIcosphere(Eigen::Vector3d(0.1, 0, 0), 0.5, 3));
+    RenderRequest request;
+    request.depth = request.silhouette = request.triangle_id = true;
+    const RenderResult full = renderer.Render(camera, request);
+    request.cull_back_faces = true;
+    const RenderResult culled = renderer.Render(camera, request);
+    EXPECT_EQ(full.triangle_id.ids, culled.triangle_id.ids);
+    EXPECT_EQ(full.silhouette.data, culled.silhouette.data);
+    EXPECT_EQ(full.depth.data, culled.depth.data);
+    EXPECT_EQ(full.color.data, culled.color.data);
+  }
+  // Seen from inside, every face is a back face: culling leaves nothing.
+  MeshRenderer renderer;
+  renderer.AddMesh(MakeIcosphere(Eigen::Vector3d::Zero(), 5.0, 2));
+  RenderRequest request;
+  request.color = false;
+  request.silhouette = true;
+  request.cull_back_faces = true;
+  const RenderResult inside = renderer.Render(TestCamera(false), request);
+  for (std::uint8_t value : inside.silhouette.data) ASSERT_EQ(value, 0);
+}
+
 TEST(MeshRenderer, StrongBarrelDistortionFillsTheCorners) {
   MeshRenderer renderer;
   Camera camera = TestCamera(false);

@@ -89,7 +89,7 @@ Image DrawActor(Image* image, const ActorPlacement& p, double spill, const std::
   part(at(30, 108), axes(7, 30), -14, shirt);
   part(at(-38, 74), axes(6, 8), 0, skin);          // left hand, attached
   if (p.hand_detached) {
-    part(at(44, 68), axes(6, 7), 0, skin);         // right hand, a few pixels from the arm
+    part(at(50, 60), axes(6, 7), 0, skin);         // right hand, a few pixels from the arm
   } else {
     part(at(38, 74), axes(6, 8), 0, skin);
   }

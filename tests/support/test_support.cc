@@ -46,11 +46,8 @@ std::string Slurp(const fs::path& path) {
 
 CommandResult RunConfluent(const std::vector<std::string>& args) {
   const char* binary = std::getenv("CONFLUENT_BIN");
+  if (binary == nullptr) binary = CONFLUENT_DEFAULT_BIN;
   CommandResult result;
-  if (binary == nullptr) {
-    result.stderr_text = "CONFLUENT_BIN is not set (run the tests through ctest)";
-    return result;
-  }
   TempDir scratch;
   std::string command = ShellQuote(binary);
   for (const auto& arg : args) command += " " + ShellQuote(arg);
@@ -64,7 +61,7 @@ CommandResult RunConfluent(const std::vector<std::string>& args) {
 
 std::string SharedDataPath(const std::string& relative) {
   const char* root = std::getenv("CONFLUENT_SHARED_DATA");
-  fs::path base = root ? fs::path(root) : fs::path("../shared/data");
+  fs::path base = root ? fs::path(root) : fs::path(CONFLUENT_DEFAULT_SHARED_DATA);
   fs::path full = base / relative;
   std::error_code error;
   if (!fs::exists(full, error)) return {};

@@ -27,7 +27,7 @@ struct CommandResult {
   std::string stderr_text;
 };
 
-// Runs the `confluent` binary (path from $CONFLUENT_BIN, set by ctest) with `args`.
+// Runs the `confluent` binary of this build (or $CONFLUENT_BIN) with `args`.
 CommandResult RunConfluent(const std::vector<std::string>& args);
 
 // Absolute path of ../shared/data/<relative>, or "" when it does not exist. Tests call

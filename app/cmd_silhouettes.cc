@@ -1,0 +1,196 @@
+// confluent silhouettes CAPTURE [--out DIR] [--frames A:B] [--method M]: masks, overlay contact
+// sheets and a summary of every camera's silhouettes.
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+
+#include "app/commands.h"
+#include "calib/capture.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "silhouette/overlay.h"
+#include "silhouette/silhouette.h"
+
+namespace confluent::app {
+namespace fs = std::filesystem;
+
+namespace {
+
+// "A:B" (B exclusive; either may be empty), "A" (one frame) -> [first, end).
+void ParseFrameRange(const std::string& text, int num_frames, int* first, int* end) {
+  *first = 0;
+  *end = num_frames;
+  if (text.empty()) return;
+  auto number = [&](const std::string& part, int fallback) {
+    if (part.empty()) return fallback;
+    std::size_t used = 0;
+    int value = 0;
+    try {
+      value = std::stoi(part, &used);
+    } catch (const std::exception&) {
+      used = std::string::npos;
+    }
+    if (used != part.size()) throw UsageError("--frames: expected A:B with frame numbers, got '" + text + "'");
+    return value;
+  };
+  const std::size_t colon = text.find(':');
+  if (colon == std::string::npos) {
+    *first = number(text, 0);
+    *end = *first + 1;
+  } else {
+    *first = number(text.substr(0, colon), 0);
+    *end = number(text.substr(colon + 1), num_frames);
+  }
+  if (*first < 0 || *end > num_frames || *first >= *end)
+    throw UsageError("--frames " + text + ": not a non-empty range within 0:" + std::to_string(num_frames));
+}
+
+std::string FrameName(int frame) {
+  char name[16];
+  std::snprintf(name, sizeof name, "%06d.png", frame);
+  return name;
+}
+
+nlohmann::json SummaryJson(const Capture& capture, const SilhouetteSummary& summary, int first, int end) {
+  nlohmann::json json;
+  json["capture"] = capture.root();
+  json["frames"] = {first, end};
+  json["warnings"] = summary.warnings;
+  json["num_flagged"] = summary.num_flagged();
+  for (const CameraSilhouetteInfo& info : summary.cameras) {
+    nlohmann::json camera;
+    camera["name"] = info.name;
+    camera["method"] = SilhouetteMethodName(info.method);
+    camera["plate"] = info.plate_path;
+    camera["noise_sigma"] = info.noise_sigma;
+    camera["threshold_scale"] = info.threshold_scale;
+    camera["greenness"] = info.greenness;
+    camera["warnings"] = info.warnings;
+    json["cameras"].push_back(camera);
+  }
+  for (const MaskSummary& mask : summary.masks) {
+    json["masks"].push_back({{"camera", capture.rig().cameras[mask.camera].name},
+                             {"frame", mask.frame},
+                             {"foreground_fraction", mask.foreground_fraction},
+                             {"parts", mask.parts},
+                             {"empty", mask.empty},
+                             {"full", mask.full},
+                             {"touches_border", mask.touches_border},
+                             {"area_jump", mask.area_jump}});
+  }
+  return json;
+}
+
+int RunSilhouettes(const ParsedArgs& args, const Context& context) {
+  const std::string root = args.positionals()[0];
+  const std::string out_dir = args.get("out", (fs::path(root) / "masks").string());
+  SilhouetteOptions options;
+  options.method = ParseSilhouetteMethod(args.get("method", "auto"));
+  options.threads = args.get_int("threads", 2);
+  if (args.has("greenness")) options.chroma.greenness = args.get_double("greenness", 0.0);
+  options.Check();
+  const bool overlays = !args.has("no-overlays");
+  const int overlay_width = args.get_int("overlay-width", 480);
+  if (overlay_width < 32 || overlay_width > 4096) throw UsageError("--overlay-width: must be within [32, 4096]");
+
+  CaptureOptions capture_options;
+  capture_options.check_every_image_header = false;
+  const Capture capture = Capture::Open(root, capture_options);
+  int first = 0, end = 0;
+  ParseFrameRange(args.get("frames"), capture.num_frames(), &first, &end);
+
+  // Contact sheets: tiles wait here until every camera of their frame is done.
+  std::mutex mutex;
+  std::map<int, std::vector<Image>> pending;
+  const int num_cameras = capture.num_cameras();
+  const std::string overlay_dir = (fs::path(out_dir) / "overlays").string();
+  auto sink = [&](int camera, int frame, const Image& image, const Image& mask, const MaskSummary& summary) {
+    const std::string& name = capture.rig().cameras[camera].name;
+    WriteImage((fs::path(out_dir) / name / FrameName(frame)).string(), mask);
+    if (!overlays) return;
+    char percent[32];
+    std::snprintf(percent, sizeof percent, "  %.1f%%", 100.0 * summary.foreground_fraction);
+    std::string label = name + percent;
+    if (summary.empty) label += " EMPTY";
+    if (summary.full) label += " FULL";
+    if (summary.touches_border) label += " BORDER";
+    if (summary.area_jump) label += " JUMP";
+    Image tile = DrawMaskOverlay(image, mask, overlay_width, label);
+    std::vector<Image> ready;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      std::vector<Image>& tiles = pending[frame];
+      if (tiles.empty()) tiles.resize(num_cameras);
+      tiles[camera] = std::move(tile);
+      if (std::all_of(tiles.begin(), tiles.end(), [](const Image& t) { return !t.empty(); })) {
+        ready = std::move(tiles);
+        pending.erase(frame);
+      }
+    }
+    if (!ready.empty()) WriteImage((fs::path(overlay_dir) / FrameName(frame)).string(), TileImages(ready));
+  };
+  const SilhouetteSummary summary =
+      ExtractSilhouettes(capture, first, end, options, sink, context.make_progress());
+
+  WriteTextFile((fs::path(out_dir) / "summary.json").string(), SummaryJson(capture, summary, first, end).dump(1));
+  std::printf("%-12s %-8s %10s %8s %8s %8s %8s %8s\n", "camera", "method", "mean fg %", "empty", "full", "border",
+              "jump", "noise");
+  const int frames = end - first;
+  for (int c = 0; c < num_cameras; ++c) {
+    double sum = 0;
+    int empty = 0, full = 0, border = 0, jump = 0;
+    for (int f = 0; f < frames; ++f) {
+      const MaskSummary& mask = summary.masks[static_cast<std::size_t>(c) * frames + f];
+      sum += mask.foreground_fraction;
+      empty += mask.empty;
+      full += mask.full;
+      border += mask.touches_border;
+      jump += mask.area_jump;
+    }
+    const CameraSilhouetteInfo& info = summary.cameras[c];
+    std::printf("%-12s %-8s %10.2f %8d %8d %8d %8d %8.2f\n", info.name.c_str(), SilhouetteMethodName(info.method),
+                100.0 * sum / frames, empty, full, border, jump, info.noise_sigma);
+  }
+  for (const std::string& warning : summary.warnings)
+    std::fprintf(stderr, "confluent silhouettes: warning: %s\n", warning.c_str());
+  std::printf("%d camera-frame(s) flagged; masks in %s%s, summary in %s\n", summary.num_flagged(), out_dir.c_str(),
+              overlays ? (", contact sheets in " + overlay_dir).c_str() : "",
+              (fs::path(out_dir) / "summary.json").string().c_str());
+  return 0;
+}
+
+}  // namespace
+
+CommandSpec MakeSilhouettesCommand() {
+  CommandSpec spec;
+  spec.name = "silhouettes";
+  spec.summary = "cut the actor out of every frame: masks, overlay contact sheets, summary";
+  spec.usage = "CAPTURE [--out DIR] [--frames A:B] [--method auto|plate|green|learned|mog2]";
+  spec.description =
+      "Writes DIR/<cam>/<frame>.png (0/255 masks; DIR defaults to CAPTURE/masks), DIR/overlays/<frame>.png\n"
+      "(every camera's image with its mask contour, tiled) and DIR/summary.json (per camera the method and\n"
+      "thresholds; per camera and frame the foreground fraction and flags: empty, full, touching the border,\n"
+      "sudden jump in area). Methods: plate = clean plate background/<cam>.png with a brightness/chromaticity\n"
+      "model that ignores shadows; green = chroma key; learned = temporal median of the video; mog2 = OpenCV's\n"
+      "mixture model; auto = plate if present, else green if the frames look green, else learned. A missing\n"
+      "plate falls back to the learned background with a warning.";
+  spec.min_positionals = spec.max_positionals = 1;
+  spec.options = {
+      {"out", "DIR", "output folder (default CAPTURE/masks)"},
+      {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
+      {"method", "NAME", "auto (default), plate, green, learned or mog2"},
+      {"greenness", "X", "chroma-key threshold in (0, 1) instead of the automatic one"},
+      {"threads", "N", "cameras processed in parallel (default 2)"},
+      {"overlay-width", "PX", "width of each camera's tile in the contact sheets (default 480)"},
+      {"no-overlays", "", "do not write contact sheets"},
+  };
+  spec.run = RunSilhouettes;
+  return spec;
+}
+
+}  // namespace confluent::app

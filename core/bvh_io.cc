@@ -1,0 +1,223 @@
+#include "core/bvh_io.h"
+
+#include <Eigen/Geometry>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace confluent {
+
+namespace {
+
+// Whitespace-separated tokens with their line numbers.
+class Tokens {
+ public:
+  Tokens(const std::string& path, std::istream& in) : path_(path) {
+    std::string line;
+    int number = 0;
+    while (std::getline(in, line)) {
+      ++number;
+      std::istringstream words(line);
+      std::string word;
+      while (words >> word) tokens_.push_back({word, number});
+    }
+    last_line_ = number;
+  }
+  bool done() const { return next_ >= tokens_.size(); }
+  int line() const { return done() ? last_line_ : tokens_[next_].line; }
+  const std::string& Peek() const {
+    if (done()) Fail("unexpected end of file (truncated?)");
+    return tokens_[next_].text;
+  }
+  std::string Next() {
+    const std::string& text = Peek();
+    ++next_;
+    return text;
+  }
+  void Expect(const std::string& word) {
+    const int at = line();
+    const std::string got = Next();
+    if (got != word) Fail(at, "expected '" + word + "', got '" + got + "'");
+  }
+  double Number() {
+    const int at = line();
+    const std::string text = Next();
+    char* end = nullptr;
+    const double value = std::strtod(text.c_str(), &end);
+    if (end == text.c_str() || *end != '\0' || !std::isfinite(value)) Fail(at, "expected a number, got '" + text + "'");
+    return value;
+  }
+  [[noreturn]] void Fail(const std::string& problem) const { Fail(line(), problem); }
+  [[noreturn]] void Fail(int at, const std::string& problem) const {
+    throw InputError(path_, "line " + std::to_string(at) + ": " + problem);
+  }
+
+ private:
+  struct Token {
+    std::string text;
+    int line;
+  };
+  std::string path_;
+  std::vector<Token> tokens_;
+  std::size_t next_ = 0;
+  int last_line_ = 0;
+};
+
+enum class Channel { kXpos, kYpos, kZpos, kXrot, kYrot, kZrot };
+
+bool ParseChannel(std::string name, Channel* channel) {
+  for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  static const std::pair<const char*, Channel> kNames[] = {
+      {"xposition", Channel::kXpos}, {"yposition", Channel::kYpos}, {"zposition", Channel::kZpos},
+      {"xrotation", Channel::kXrot}, {"yrotation", Channel::kYrot}, {"zrotation", Channel::kZrot}};
+  for (const auto& [text, value] : kNames)
+    if (name == text) {
+      *channel = value;
+      return true;
+    }
+  return false;
+}
+
+struct ParsedJoint {
+  std::vector<Channel> channels;
+  bool end_site = false;
+};
+
+}  // namespace
+
+BvhMotion ReadBvh(const std::string& path, const BvhReadOptions& options) {
+  std::ifstream file(path);
+  if (!file) throw InputError(path, "cannot open the file");
+  Tokens tokens(path, file);
+  BvhMotion motion;
+  std::vector<ParsedJoint> parsed;
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+  if (options.y_up_to_z_up) axes << 1, 0, 0, 0, 0, -1, 0, 1, 0;
+
+  tokens.Expect("HIERARCHY");
+  {
+    const int at = tokens.line();
+    if (tokens.Next() != "ROOT") tokens.Fail(at, "expected ROOT");
+  }
+  // Recursive descent with an explicit stack of open joints.
+  std::vector<int> stack;
+  auto open_joint = [&](const std::string& name, bool end_site) {
+    Joint joint;
+    joint.name = name;
+    joint.parent = stack.empty() ? -1 : stack.back();
+    tokens.Expect("{");
+    tokens.Expect("OFFSET");
+    Eigen::Vector3d offset;
+    for (int k = 0; k < 3; ++k) offset(k) = tokens.Number();
+    joint.offset_in_parent = options.scale * (axes * offset);
+    ParsedJoint info;
+    info.end_site = end_site;
+    if (!end_site) {
+      tokens.Expect("CHANNELS");
+      const int at = tokens.line();
+      const double count = tokens.Number();
+      if (count != 0 && count != 3 && count != 6) tokens.Fail(at, "CHANNELS count must be 0, 3 or 6");
+      for (int k = 0; k < static_cast<int>(count); ++k) {
+        const int channel_line = tokens.line();
+        const std::string text = tokens.Next();
+        Channel channel;
+        if (!ParseChannel(text, &channel)) tokens.Fail(channel_line, "unknown channel '" + text + "' of joint " + name);
+        info.channels.push_back(channel);
+      }
+    }
+    motion.skeleton.joints.push_back(joint);
+    parsed.push_back(info);
+    stack.push_back(motion.skeleton.size() - 1);
+  };
+  open_joint(tokens.Next(), false);
+  while (!stack.empty()) {
+    const int at = tokens.line();
+    const std::string word = tokens.Next();
+    if (word == "JOINT") {
+      if (parsed[stack.back()].end_site) tokens.Fail(at, "JOINT inside an End Site");
+      open_joint(tokens.Next(), false);
+    } else if (word == "End") {
+      tokens.Expect("Site");
+      open_joint(motion.skeleton.joints[stack.back()].name + "_end", true);
+    } else if (word == "}") {
+      stack.pop_back();
+    } else {
+      tokens.Fail(at, "expected JOINT, End Site or '}', got '" + word + "'");
+    }
+  }
+  tokens.Expect("MOTION");
+  tokens.Expect("Frames:");
+  int frames_line = tokens.line();
+  const double num_frames = tokens.Number();
+  if (num_frames < 0 || num_frames != std::floor(num_frames)) tokens.Fail(frames_line, "bad frame count");
+  tokens.Expect("Frame");
+  tokens.Expect("Time:");
+  motion.frame_time_s = tokens.Number();
+
+  // Drop End Sites unless wanted, keeping parents before children.
+  std::vector<int> new_index(parsed.size(), -1);
+  Skeleton skeleton;
+  for (std::size_t j = 0; j < parsed.size(); ++j) {
+    if (parsed[j].end_site && !options.include_end_sites) continue;
+    Joint joint = motion.skeleton.joints[j];
+    joint.parent = joint.parent < 0 ? -1 : new_index[joint.parent];
+    new_index[j] = skeleton.size();
+    skeleton.joints.push_back(joint);
+    std::vector<std::string> names;
+    static const char* kChannelNames[] = {"Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation"};
+    for (Channel c : parsed[j].channels) names.push_back(kChannelNames[static_cast<int>(c)]);
+    motion.channels.push_back(names);
+  }
+  motion.skeleton = skeleton;
+
+  bool warned_translation = false;
+  for (int f = 0; f < static_cast<int>(num_frames); ++f) {
+    if (tokens.done()) tokens.Fail("the file ends after " + std::to_string(f) + " of " +
+                                   std::to_string(static_cast<int>(num_frames)) + " frames (truncated)");
+    const int frame_line = tokens.line();
+    Pose pose = Pose::Rest(skeleton.size());
+    for (std::size_t j = 0; j < parsed.size(); ++j) {
+      Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+      Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+      bool has_translation = false;
+      for (Channel channel : parsed[j].channels) {
+        if (tokens.done() || tokens.line() != frame_line)
+          tokens.Fail(frame_line, "frame " + std::to_string(f) + " has too few values");
+        const double value = tokens.Number();
+        switch (channel) {
+          case Channel::kXpos: translation.x() = value; has_translation = true; break;
+          case Channel::kYpos: translation.y() = value; has_translation = true; break;
+          case Channel::kZpos: translation.z() = value; has_translation = true; break;
+          case Channel::kXrot: rotation = rotation * Eigen::AngleAxisd(value * M_PI / 180, Eigen::Vector3d::UnitX()); break;
+          case Channel::kYrot: rotation = rotation * Eigen::AngleAxisd(value * M_PI / 180, Eigen::Vector3d::UnitY()); break;
+          case Channel::kZrot: rotation = rotation * Eigen::AngleAxisd(value * M_PI / 180, Eigen::Vector3d::UnitZ()); break;
+        }
+      }
+      if (new_index[j] < 0) continue;
+      pose.local_rotations[new_index[j]] = Eigen::Quaterniond(axes * rotation * axes.transpose()).normalized();
+      if (has_translation) {
+        const Eigen::Vector3d scaled = options.scale * (axes * translation);
+        if (j == 0) {
+          pose.root_translation = scaled;
+        } else if (!warned_translation &&
+                   (scaled - skeleton.joints[new_index[j]].offset_in_parent).norm() >
+                       1e-3 * std::max(1.0, skeleton.joints[new_index[j]].offset_in_parent.norm())) {
+          motion.warnings.push_back("translation channels of non-root joints are ignored (first: joint " +
+                                    skeleton.joints[new_index[j]].name + ", frame " + std::to_string(f) + ")");
+          warned_translation = true;
+        }
+      }
+    }
+    if (!tokens.done() && tokens.line() == frame_line)
+      tokens.Fail(frame_line, "frame " + std::to_string(f) + " has too many values");
+    motion.frames.push_back(pose);
+  }
+  if (!tokens.done()) tokens.Fail("unexpected data after the last frame");
+  return motion;
+}
+
+}  // namespace confluent

@@ -1,0 +1,123 @@
+// BVH reading: channel orders, End Sites, forward kinematics, bad files, a real CMU file.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <fstream>
+
+#include "core/bvh_io.h"
+#include "core/error.h"
+#include "tests/support/test_support.h"
+
+namespace confluent {
+namespace {
+
+// Root with 6 channels (Z Y X order), a child with X Z Y rotation order, and an End Site.
+const char kBvh[] =
+    "HIERARCHY\n"
+    "ROOT Hips\n"
+    "{\n"
+    "  OFFSET 0 1 0\n"
+    "  CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n"
+    "  JOINT Knee\n"
+    "  {\n"
+    "    OFFSET 0 -2 0\n"
+    "    CHANNELS 3 Xrotation Zrotation Yrotation\n"
+    "    End Site\n"
+    "    {\n"
+    "      OFFSET 0 0 3\n"
+    "    }\n"
+    "  }\n"
+    "}\n"
+    "MOTION\n"
+    "Frames: 2\n"
+    "Frame Time: 0.0333333\n"
+    "0 0 0 0 0 0 0 0 0\n"
+    "1 2 3 90 0 0 30 40 50\n";
+
+Eigen::Matrix3d Rot(double deg, const Eigen::Vector3d& axis) {
+  return Eigen::AngleAxisd(deg * M_PI / 180, axis).toRotationMatrix();
+}
+
+TEST(BvhIo, ParsesChannelOrdersEndSitesAndKinematics) {
+  testing::TempDir dir;
+  std::ofstream(dir / "a.bvh") << kBvh;
+  BvhReadOptions options;
+  options.scale = 0.5;
+  const BvhMotion motion = ReadBvh(dir / "a.bvh", options);
+  ASSERT_EQ(motion.skeleton.size(), 3);
+  EXPECT_EQ(motion.skeleton.joints[2].name, "Knee_end");
+  EXPECT_EQ(motion.skeleton.joints[2].parent, 1);
+  EXPECT_EQ(motion.channels[1], (std::vector<std::string>{"Xrotation", "Zrotation", "Yrotation"}));
+  EXPECT_TRUE(motion.channels[2].empty());
+  EXPECT_NEAR(motion.frame_time_s, 0.0333333, 1e-12);
+  ASSERT_EQ(motion.frames.size(), 2u);
+  // Frame 1 by hand: root at offset + translation, rotations composed in channel order.
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY(), z = Eigen::Vector3d::UnitZ();
+  const Eigen::Matrix3d root = Rot(90, z) * Rot(0, y) * Rot(0, x);
+  const Eigen::Matrix3d knee = Rot(30, x) * Rot(40, z) * Rot(50, y);
+  const Eigen::Vector3d hips = 0.5 * Eigen::Vector3d(0, 1, 0) + 0.5 * Eigen::Vector3d(1, 2, 3);
+  const Eigen::Vector3d knee_at = hips + root * (0.5 * Eigen::Vector3d(0, -2, 0));
+  const Eigen::Vector3d end_at = knee_at + root * knee * (0.5 * Eigen::Vector3d(0, 0, 3));
+  const auto positions = JointPositions(motion.skeleton, motion.frames[1]);
+  EXPECT_LT((positions[0] - hips).norm(), 1e-9);
+  EXPECT_LT((positions[1] - knee_at).norm(), 1e-9);
+  EXPECT_LT((positions[2] - end_at).norm(), 1e-9);
+  // Without End Sites, and converted to Z up: the rest knee is below the hips along -z.
+  options.include_end_sites = false;
+  options.y_up_to_z_up = true;
+  const BvhMotion zup = ReadBvh(dir / "a.bvh", options);
+  ASSERT_EQ(zup.skeleton.size(), 2);
+  EXPECT_LT((zup.skeleton.joints[1].offset_in_parent - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
+  const auto zup_positions = JointPositions(zup.skeleton, zup.frames[1]);
+  Eigen::Matrix3d axes;
+  axes << 1, 0, 0, 0, 0, -1, 0, 1, 0;
+  EXPECT_LT((zup_positions[1] - axes * knee_at).norm(), 1e-9);
+}
+
+TEST(BvhIo, BadFilesNameFileAndLine) {
+  testing::TempDir dir;
+  auto expect_error = [&](const std::string& text, const std::string& needle) {
+    std::ofstream(dir / "bad.bvh") << text;
+    try {
+      ReadBvh(dir / "bad.bvh");
+      ADD_FAILURE() << "no error";
+    } catch (const InputError& error) {
+      const std::string what = error.what();
+      EXPECT_NE(what.find(dir / "bad.bvh"), std::string::npos) << what;
+      EXPECT_NE(what.find(needle), std::string::npos) << what;
+    }
+  };
+  std::string text = kBvh;
+  // Truncated inside the motion block and inside the hierarchy.
+  expect_error(text.substr(0, text.size() - 20), "line 20: frame 1 has too few values");
+  expect_error(text.substr(0, text.find("MOTION") - 10), "unexpected end of file");
+  expect_error(std::string(kBvh).substr(0, text.rfind("1 2 3")), "ends after 1 of 2 frames");
+  std::string unknown = kBvh;
+  unknown.replace(unknown.find("Xrotation Zrotation"), 9, "Wrotation");
+  expect_error(unknown, "line 9: unknown channel 'Wrotation'");
+  std::string extra = kBvh;
+  extra += "1 2 3 4 5 6 7 8 9\n";
+  expect_error(extra, "after the last frame");
+  expect_error("HIERARCHY\nROOT Hips\n{\n  OFFSET 0 zero 0\n", "line 4: expected a number");
+  EXPECT_THROW(ReadBvh(dir / "missing.bvh"), InputError);
+}
+
+TEST(BvhIo, ReadsRealCmuFile) {
+  const std::string path = testing::SharedDataPath("bvh/cmu_131_01.bvh");
+  if (path.empty()) GTEST_SKIP() << "shared data bvh/cmu_131_01.bvh not available";
+  const BvhMotion motion = ReadBvh(path);
+  std::ifstream file(path);
+  std::string line;
+  int frames = -1;
+  while (std::getline(file, line))
+    if (line.rfind("Frames:", 0) == 0) frames = std::stoi(line.substr(7));
+  EXPECT_EQ(static_cast<int>(motion.frames.size()), frames);
+  EXPECT_GE(motion.skeleton.size(), 25);
+  EXPECT_TRUE(motion.skeleton.IsTopologicallyOrdered());
+  for (const Pose& pose : motion.frames)
+    for (const auto& position : JointPositions(motion.skeleton, pose)) ASSERT_TRUE(position.allFinite());
+}
+
+}  // namespace
+}  // namespace confluent
