@@ -109,9 +109,28 @@ int RunSilhouettes(const ParsedArgs& args, const Context& context) {
   std::map<int, std::vector<Image>> pending;
   const int num_cameras = capture.num_cameras();
   const std::string overlay_dir = (fs::path(out_dir) / "overlays").string();
+  // Optional comparison with reference masks: IoU per camera and frame (-1 = no reference).
+  const std::string compare_dir = args.get("compare");
+  std::vector<double> ious(static_cast<std::size_t>(num_cameras) * (end - first), -1.0);
   auto sink = [&](int camera, int frame, const Image& image, const Image& mask, const MaskSummary& summary) {
     const std::string& name = capture.rig().cameras[camera].name;
     WriteImage((fs::path(out_dir) / name / FrameName(frame)).string(), mask);
+    if (!compare_dir.empty()) {
+      const fs::path reference = fs::path(compare_dir) / name / FrameName(frame);
+      if (fs::exists(reference)) {
+        const Image rgb = ToRgb8(ReadImage(reference.string()));
+        if (rgb.width != mask.width || rgb.height != mask.height)
+          throw InputError(reference.string(), "reference mask differs in size from the frames");
+        std::size_t both = 0, either = 0;
+        for (std::size_t i = 0; i < mask.data.size(); ++i) {
+          const bool a = mask.data[i] != 0, b = rgb.data[3 * i] >= 128;
+          both += a && b;
+          either += a || b;
+        }
+        ious[static_cast<std::size_t>(camera) * (end - first) + (frame - first)] =
+            either ? static_cast<double>(both) / either : 1.0;
+      }
+    }
     if (!overlays) return;
     char percent[32];
     std::snprintf(percent, sizeof percent, "  %.1f%%", 100.0 * summary.foreground_fraction);
@@ -137,10 +156,17 @@ int RunSilhouettes(const ParsedArgs& args, const Context& context) {
   const SilhouetteSummary summary =
       ExtractSilhouettes(capture, first, end, options, sink, context.make_progress());
 
-  WriteTextFile((fs::path(out_dir) / "summary.json").string(), SummaryJson(capture, summary, first, end).dump(1));
-  std::printf("%-12s %-8s %10s %8s %8s %8s %8s %8s\n", "camera", "method", "mean fg %", "empty", "full", "border",
-              "jump", "noise");
+  nlohmann::json json = SummaryJson(capture, summary, first, end);
+  const bool compared = std::any_of(ious.begin(), ious.end(), [](double iou) { return iou >= 0; });
+  if (compared)
+    for (std::size_t i = 0; i < ious.size(); ++i)
+      if (ious[i] >= 0) json["masks"][i]["iou"] = ious[i];
+  WriteTextFile((fs::path(out_dir) / "summary.json").string(), json.dump(1));
+  std::printf("%-12s %-8s %10s %6s %6s %6s %6s %10s%s\n", "camera", "method", "mean fg %", "empty", "full", "border",
+              "jump", "threshold", compared ? "   mean IoU  worst IoU" : "");
   const int frames = end - first;
+  double all_iou_sum = 0, all_iou_worst = 1;
+  int all_iou_count = 0;
   for (int c = 0; c < num_cameras; ++c) {
     double sum = 0;
     int empty = 0, full = 0, border = 0, jump = 0;
@@ -153,9 +179,31 @@ int RunSilhouettes(const ParsedArgs& args, const Context& context) {
       jump += mask.area_jump;
     }
     const CameraSilhouetteInfo& info = summary.cameras[c];
-    std::printf("%-12s %-8s %10.2f %8d %8d %8d %8d %8.2f\n", info.name.c_str(), SilhouetteMethodName(info.method),
-                100.0 * sum / frames, empty, full, border, jump, info.noise_sigma);
+    // Green key: the greenness threshold; background models: the automatic threshold factor.
+    char threshold[32];
+    std::snprintf(threshold, sizeof threshold, info.method == SilhouetteMethod::kGreen ? "g %.3f"
+                                               : info.method == SilhouetteMethod::kMog2 ? "-" : "x %.2f",
+                  info.method == SilhouetteMethod::kGreen ? info.greenness : info.threshold_scale);
+    std::printf("%-12s %-8s %10.2f %6d %6d %6d %6d %10s", info.name.c_str(), SilhouetteMethodName(info.method),
+                100.0 * sum / frames, empty, full, border, jump, threshold);
+    double iou_sum = 0, iou_worst = 1;
+    int iou_count = 0;
+    for (int f = 0; f < frames; ++f) {
+      const double iou = ious[static_cast<std::size_t>(c) * frames + f];
+      if (iou < 0) continue;
+      iou_sum += iou;
+      iou_worst = std::min(iou_worst, iou);
+      ++iou_count;
+    }
+    if (iou_count > 0) std::printf("   %9.4f  %9.4f", iou_sum / iou_count, iou_worst);
+    std::printf("\n");
+    all_iou_sum += iou_sum;
+    all_iou_count += iou_count;
+    all_iou_worst = std::min(all_iou_worst, iou_count ? iou_worst : 1.0);
   }
+  if (all_iou_count > 0)
+    std::printf("IoU against %s: mean %.4f, worst %.4f over %d camera-frames\n", compare_dir.c_str(),
+                all_iou_sum / all_iou_count, all_iou_worst, all_iou_count);
   for (const std::string& warning : summary.warnings)
     std::fprintf(stderr, "confluent silhouettes: warning: %s\n", warning.c_str());
   std::printf("%d camera-frame(s) flagged; masks in %s%s, summary in %s\n", summary.num_flagged(), out_dir.c_str(),
@@ -186,6 +234,7 @@ CommandSpec MakeSilhouettesCommand() {
       {"method", "NAME", "auto (default), plate, green, learned or mog2"},
       {"greenness", "X", "chroma-key threshold in (0, 1) instead of the automatic one"},
       {"threads", "N", "cameras processed in parallel (default 2)"},
+      {"compare", "DIR", "reference masks DIR/<cam>/<frame>.png: report IoU per camera (and in the summary)"},
       {"overlay-width", "PX", "width of each camera's tile in the contact sheets (default 480)"},
       {"no-overlays", "", "do not write contact sheets"},
   };

@@ -6,6 +6,7 @@
 
 namespace confluent::app {
 
+CommandSpec MakeDemoCommand();           // cmd_demo.cc
 CommandSpec MakeCalibConvertCommand();   // cmd_calib.cc
 CommandSpec MakeCalibCheckCommand();     // cmd_calib_check.cc
 CommandSpec MakeCalibrateCommand();      // cmd_calibrate.cc
@@ -15,5 +16,6 @@ CommandSpec MakeRenderInfoCommand();     // cmd_render_info.cc
 CommandSpec MakeSynthCommand();          // cmd_synth.cc
 CommandSpec MakeSilhouettesCommand();    // cmd_silhouettes.cc
 CommandSpec MakeAnimateCommand();        // cmd_animate.cc
+CommandSpec MakeTrackCommand();          // cmd_track.cc
 
 }  // namespace confluent::app

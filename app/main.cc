@@ -15,6 +15,7 @@ namespace {
 
 std::vector<CommandSpec> AllCommands() {
   return {
+      MakeDemoCommand(),
       MakeCaptureInfoCommand(),
       MakeCalibConvertCommand(),
       MakeCalibCheckCommand(),
@@ -24,6 +25,7 @@ std::vector<CommandSpec> AllCommands() {
       MakeSynthCommand(),
       MakeSilhouettesCommand(),
       MakeAnimateCommand(),
+      MakeTrackCommand(),
   };
 }
 

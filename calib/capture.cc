@@ -204,9 +204,13 @@ std::string Capture::MaskPath(int camera, int frame) const {
 
 Image Capture::ReadMask(int camera, int frame) const {
   const std::string path = MaskPath(camera, frame);
+  Image mask = ReadMaskFile(path);
+  CheckSize(path, mask.width, mask.height, rig_.cameras[camera]);
+  return mask;
+}
+
+Image ReadMaskFile(const std::string& path) {
   const Image rgb = ToRgb8(ReadImage(path));
-  if (rgb.width != rig_.cameras[camera].width || rgb.height != rig_.cameras[camera].height)
-    CheckSize(path, rgb.width, rgb.height, rig_.cameras[camera]);
   Image mask(rgb.width, rgb.height, 1);
   for (std::size_t i = 0; i < mask.data.size(); ++i) mask.data[i] = rgb.data[3 * i] >= 128 ? 255 : 0;
   return mask;

@@ -74,6 +74,10 @@ class Capture {
   std::unique_ptr<VideoCache> videos_;
 };
 
+// Reads a mask file as 1-channel 8-bit 0/255 (first channel thresholded at half range).
+// Throws InputError naming the file.
+Image ReadMaskFile(const std::string& path);
+
 // Converts any 1-4 channel 8/16-bit/float image to 8-bit RGB.
 Image ToRgb8(const Image& image);
 

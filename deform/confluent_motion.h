@@ -69,8 +69,9 @@ struct DeformSummary {
 
 // Animates one scan from a template mesh sequence. Construction factors the two sparse systems
 // (harmonic interpolation with Dirichlet values at the correspondence triangles' vertices, and
-// the cotangent Laplacian of the scan with one pinned vertex per component) once; each Deform()
-// costs back-substitutions and assembly. Frames should be given in order: sign consistency and
+// the cotangent Laplacian of the scan plus the soft positional constraints, or with one pinned
+// vertex per component) once; each Deform() costs back-substitutions and assembly, or, with
+// segment weight fields, one back-substitution. Frames should be given in order: sign consistency and
 // the intermediate reference use the previous frame.
 class ConfluentMotion {
  public:

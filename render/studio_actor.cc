@@ -638,14 +638,6 @@ SkinWeights ComputeWeights(const Mesh& mesh, const Adjacency& adjacency, const s
 
 }  // namespace
 
-std::string BodySegmentName(int segment) {
-  static const char* const kNames[kNumBodySegments] = {
-      "head", "neck", "upper_torso", "lower_torso", "left_upper_arm", "left_forearm", "left_hand",
-      "right_upper_arm", "right_forearm", "right_hand", "left_thigh", "left_shank", "left_foot",
-      "right_thigh", "right_shank", "right_foot"};
-  return segment >= 0 && segment < kNumBodySegments ? kNames[segment] : "unknown";
-}
-
 void StudioActorOptions::Check() const {
   auto positive = [](double v, const char* name) {
     if (!(v > 0.0) || !std::isfinite(v)) throw UsageError(std::string(name) + ": must be positive");

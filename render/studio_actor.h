@@ -12,24 +12,13 @@
 #include <string>
 #include <vector>
 
+#include "core/body_segments.h"
 #include "core/mesh.h"
 #include "core/skeleton.h"
 #include "core/skinning.h"
 
 namespace confluent {
 
-// The 16 body segments of the template topology, in this order (also Mesh::face_labels).
-enum class BodySegment {
-  kHead, kNeck, kUpperTorso, kLowerTorso,
-  kLeftUpperArm, kLeftForearm, kLeftHand,
-  kRightUpperArm, kRightForearm, kRightHand,
-  kLeftThigh, kLeftShank, kLeftFoot,
-  kRightThigh, kRightShank, kRightFoot,
-};
-constexpr int kNumBodySegments = 16;
-
-// snake_case name of a segment ("left_forearm").
-std::string BodySegmentName(int segment);
 
 // Proportions and meshing detail of the studio actor.
 struct StudioActorOptions {

@@ -28,7 +28,6 @@ Vector3d Shoulder(bool left, double abduction_deg, double flexion_deg = 0.0, dou
 }
 
 std::vector<Key> Keys() {
-  const Vector3d zero = Vector3d::Zero();
   auto arms = [](double abduction, double flexion_left, double flexion_right, double elbow) {
     return std::map<std::string, Vector3d>{
         {"left_shoulder", Shoulder(true, abduction, flexion_left)},
@@ -68,7 +67,6 @@ std::vector<Key> Keys() {
                          {"left_ankle", Vector3d(30, 0, 0)}, {"right_ankle", Vector3d(30, 0, 0)},
                          {"spine", Vector3d(-25, 0, 0)}, {"chest", Vector3d(-8, 0, 0)}, {"head", Vector3d(25, 0, 0)}})});
   keys.push_back({4.0, 360.0, arms(0, 0, 0, 10)});
-  (void)zero;
   return keys;
 }
 

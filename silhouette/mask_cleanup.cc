@@ -15,7 +15,8 @@ void MaskCleanupOptions::Check() const {
   auto require = [](bool ok, const char* message) {
     if (!ok) throw UsageError(std::string("mask clean-up: ") + message);
   };
-  require(work_scale == 1 || work_scale == 2 || work_scale == 4, "work_scale must be 1, 2 or 4");
+  require(work_scale == 0 || work_scale == 1 || work_scale == 2 || work_scale == 4,
+          "work_scale must be 0 (automatic), 1, 2 or 4");
   require(open_radius_px >= 0 && open_radius_px <= 20, "open_radius_px must be within [0, 20]");
   require(close_radius_px >= 0 && close_radius_px <= 20, "close_radius_px must be within [0, 20]");
   require(connect_radius_px >= 0 && connect_radius_px <= 20, "connect_radius_px must be within [0, 20]");
@@ -44,7 +45,7 @@ Image CleanMask(const Image& raw, const MaskCleanupOptions& options, MaskCleanup
   MaskCleanupStats& out_stats = stats ? *stats : local;
   out_stats = {};
   const cv::Mat full = AsCvMat(raw);
-  const int scale = options.work_scale;
+  const int scale = options.work_scale > 0 ? options.work_scale : raw.width <= 640 ? 1 : raw.width <= 2048 ? 2 : 4;
   cv::Mat work;
   if (scale == 1) {
     work = full.clone();

@@ -10,10 +10,12 @@ namespace confluent {
 // Settings of CleanMask.
 struct MaskCleanupOptions {
   // Components, opening, closing and holes are computed at 1/work_scale of the resolution
-  // (1, 2 or 4); the boundary band is taken from the full-resolution mask.
-  int work_scale = 2;
-  // Opening radius (removes speckle), in work pixels.
-  int open_radius_px = 1;
+  // (1, 2 or 4; 0 = automatic: 1 up to 640 pixels wide, 2 up to 2048, else 4); the boundary
+  // band is taken from the full-resolution mask.
+  int work_scale = 0;
+  // Opening radius, in work pixels: removes speckle touching the actor and thin bridges, but
+  // also limbs thinner than twice the radius; 0 = none (isolated speckle is dropped anyway).
+  int open_radius_px = 0;
   // Closing radius applied to the mask's shape (fills cracks, but also concave corners such as
   // armpits), in work pixels; 0 = none.
   int close_radius_px = 0;
@@ -27,7 +29,7 @@ struct MaskCleanupOptions {
   double max_part_distance_fraction = 0.25;
   // Holes (background regions enclosed by the actor) up to this fraction of the actor's area
   // are filled; larger ones (a gap between arm and body) stay.
-  double max_hole_fraction = 0.002;
+  double max_hole_fraction = 0.005;
   // Throws UsageError naming the bad field.
   void Check() const;
 };

@@ -38,7 +38,10 @@ TEST(SynthCommand, TinyPresetWritesCaptureAndGroundTruth) {
       const Image mask = ReadImage(gt + "/masks/" + camera + "/" + name);
       ASSERT_EQ(mask.channels, 1);
       int on = 0, other = 0;
-      for (std::uint8_t v : mask.data) (v == 255 ? on : (v == 0 ? 0 : other))++;
+      for (std::uint8_t v : mask.data) {
+        if (v == 255) ++on;
+        else if (v != 0) ++other;
+      }
       EXPECT_GT(on, 200) << camera << " " << name;  // the actor is in every view
       EXPECT_EQ(other, 0);                          // binary 0/255
     }

@@ -68,7 +68,7 @@ Image MakeGreenScreen(int width, int height, unsigned seed) {
   return screen;
 }
 
-Image DrawActor(Image* image, const ActorPlacement& p, double spill, const std::uint8_t* spill_rgb) {
+Image DrawActor(Image* image, const ActorPlacement& p, double spill) {
   const double s = p.height_px / 170.0;
   const cv::Point2d feet(p.feet_x, p.feet_y);
   auto at = [&](double dx, double dy) { return cv::Point(cvRound(feet.x + dx * s), cvRound(feet.y - dy * s)); };
@@ -97,16 +97,13 @@ Image DrawActor(Image* image, const ActorPlacement& p, double spill, const std::
   part(at(0, 160), axes(11, 7), 0, hair);
   cv::Mat target = AsCvMat(*image);
   colour.copyTo(target, mask);
-  if (spill > 0 && spill_rgb != nullptr) {
+  if (spill > 0) {
     cv::Mat inner;
     cv::erode(mask, inner, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
     for (int y = 0; y < image->height; ++y)
       for (int x = 0; x < image->width; ++x)
         if (mask.at<std::uint8_t>(y, x) && !inner.at<std::uint8_t>(y, x))
-          for (int c = 0; c < 3; ++c) {
-            std::uint8_t& v = image->at<std::uint8_t>(x, y, c);
-            v = Clamp8((1 - spill) * v + spill * spill_rgb[c]);
-          }
+          image->at<std::uint8_t>(x, y, 1) = Clamp8(image->at<std::uint8_t>(x, y, 1) * (1 + spill));
   }
   return ImageFromCvMat(mask);
 }

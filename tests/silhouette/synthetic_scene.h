@@ -24,9 +24,9 @@ struct ActorPlacement {
 };
 
 // Draws the actor into `image` (8-bit RGB) and returns its exact mask (0/255). With
-// `spill` > 0, the actor's outermost 2 pixels are blended towards `spill_rgb` by that fraction.
-Image DrawActor(Image* image, const ActorPlacement& placement, double spill = 0.0,
-                const std::uint8_t* spill_rgb = nullptr);
+// `spill` > 0, the actor's outermost 2 pixels reflect green light from the screen: their green
+// channel is multiplied by (1 + spill) (reflected light scales with the surface's albedo).
+Image DrawActor(Image* image, const ActorPlacement& placement, double spill = 0.0);
 
 // Multiplies the pixels within an ellipse (centre, semi-axes) by a factor that goes smoothly
 // from `darkest` in the centre to 1 at the rim.

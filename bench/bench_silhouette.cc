@@ -1,0 +1,200 @@
+// Silhouette extraction speed: 8 cameras at 1024x768 per frame (decoding excluded), on the
+// threads the capture driver uses; and frame decoding from PNG, JPEG and video separately.
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <random>
+#include <thread>
+#include <unistd.h>
+
+#include "core/cv_interop.h"
+#include "core/image_io.h"
+#include "core/video.h"
+#include "silhouette/silhouette.h"
+
+namespace confluent {
+namespace {
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 1024;
+constexpr int kHeight = 768;
+constexpr int kCameras = 8;
+
+// A textured background (tiles, grain, gradient) with Gaussian noise.
+Image MakePlate(unsigned seed) {
+  Image plate(kWidth, kHeight, 3);
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.0f, 2.0f);
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const bool odd = ((x / 64) + (y / 48)) % 2;
+      const float base = (odd ? 140.0f : 100.0f) + 10.0f * std::sin(0.3f * x + 0.2f * y) + 30.0f * y / kHeight;
+      for (int c = 0; c < 3; ++c)
+        plate.at<std::uint8_t>(x, y, c) =
+            static_cast<std::uint8_t>(std::clamp(base + 8.0f * c + noise(rng), 0.0f, 255.0f));
+    }
+  return plate;
+}
+
+// The plate with a person-sized coloured blob (and a darker floor shadow), re-noised.
+Image MakeFrame(const Image& plate, unsigned seed) {
+  Image frame = plate;
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.0f, 2.0f);
+  const float cx = kWidth * 0.5f, cy = kHeight * 0.45f;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const float dx = (x - cx) / 90.0f, dy = (y - cy) / 280.0f;
+      const float sx = (x - cx - 120.0f) / 150.0f, sy = (y - cy - 290.0f) / 25.0f;
+      for (int c = 0; c < 3; ++c) {
+        float value = frame.at<std::uint8_t>(x, y, c);
+        if (dx * dx + dy * dy < 1) value = c == 0 ? 190.0f : c == 1 ? 60.0f : 50.0f;
+        else if (sx * sx + sy * sy < 1) value *= 0.6f;
+        frame.at<std::uint8_t>(x, y, c) = static_cast<std::uint8_t>(std::clamp(value + noise(rng), 0.0f, 255.0f));
+      }
+    }
+  return frame;
+}
+
+struct Rig8 {
+  std::vector<Image> frames;
+  std::vector<SilhouetteExtractor> extractors;
+};
+
+Rig8& SharedRig() {
+  static Rig8* rig = [] {
+    auto* r = new Rig8;
+    for (int c = 0; c < kCameras; ++c) {
+      const Image plate = MakePlate(10 + c);
+      r->frames.push_back(MakeFrame(plate, 100 + c));
+      const Image& frame = r->frames.back();
+      r->extractors.emplace_back("cam" + std::to_string(c), std::vector<Image>{plate}, "plate",
+                                 [&frame](int) { return frame; }, 1, 0, SilhouetteOptions{});
+    }
+    return r;
+  }();
+  return *rig;
+}
+
+// One multi-camera frame: cameras split over `threads` threads, as ExtractSilhouettes does.
+void BM_Extract8Cameras1024x768(benchmark::State& state) {
+  Rig8& rig = SharedRig();
+  const int threads = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    auto work = [&](int t) {
+      for (int c = t; c < kCameras; c += threads) {
+        MaskSummary summary;
+        benchmark::DoNotOptimize(rig.extractors[c].Extract(rig.frames[c], 0, &summary));
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
+    work(0);
+    for (auto& thread : pool) thread.join();
+  }
+  state.SetLabel("per multi-camera frame");
+}
+BENCHMARK(BM_Extract8Cameras1024x768)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The stages of one camera: classification alone, and classification + clean-up.
+void BM_ClassifyOneCamera(benchmark::State& state) {
+  Rig8& rig = SharedRig();
+  for (auto _ : state) benchmark::DoNotOptimize(rig.extractors[0].model().Classify(rig.frames[0]));
+}
+BENCHMARK(BM_ClassifyOneCamera)->Unit(benchmark::kMillisecond);
+
+void BM_CleanMaskOneCamera(benchmark::State& state) {
+  Rig8& rig = SharedRig();
+  const Image raw = rig.extractors[0].model().Classify(rig.frames[0]);
+  for (auto _ : state) benchmark::DoNotOptimize(CleanMask(raw, MaskCleanupOptions{}));
+}
+BENCHMARK(BM_CleanMaskOneCamera)->Unit(benchmark::kMillisecond);
+
+void BM_ChromaKeyOneCamera(benchmark::State& state) {
+  Rig8& rig = SharedRig();
+  for (auto _ : state) benchmark::DoNotOptimize(ChromaKey(rig.frames[0], 0.2, ChromaKeyOptions{}));
+}
+BENCHMARK(BM_ChromaKeyOneCamera)->Unit(benchmark::kMillisecond);
+
+// Decoding one 1024x768 frame.
+struct DecodeFiles {
+  std::string dir;
+  std::string png, jpeg, mjpg_video, mp4_video;
+  int video_frames = 50;
+  ~DecodeFiles() {
+    std::error_code ignored;
+    if (!dir.empty()) fs::remove_all(dir, ignored);
+  }
+};
+
+const DecodeFiles& SharedFiles() {
+  static const std::unique_ptr<DecodeFiles> files = [] {
+    auto f = std::make_unique<DecodeFiles>();
+    f->dir = (fs::temp_directory_path() / ("bench_silhouette_" + std::to_string(::getpid()))).string();
+    fs::create_directories(f->dir);
+    const Image frame = MakeFrame(MakePlate(1), 2);
+    f->png = f->dir + "/frame.png";
+    f->jpeg = f->dir + "/frame.jpg";
+    WriteImage(f->png, frame);
+    WriteImage(f->jpeg, frame);
+    f->mjpg_video = f->dir + "/video_mjpg.avi";
+    f->mp4_video = f->dir + "/video_mp4v.mp4";
+    for (const auto& [path, fourcc] : {std::pair{f->mjpg_video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G')},
+                                        std::pair{f->mp4_video, cv::VideoWriter::fourcc('m', 'p', '4', 'v')}}) {
+      cv::VideoWriter writer(path, fourcc, 25, cv::Size(kWidth, kHeight));
+      for (int k = 0; k < f->video_frames; ++k) {
+        Image moved = frame;
+        std::rotate(moved.data.begin(), moved.data.begin() + 3 * 8 * k, moved.data.end());
+        cv::Mat bgr;
+        cv::cvtColor(AsCvMat(moved), bgr, cv::COLOR_RGB2BGR);
+        writer.write(bgr);
+      }
+    }
+    return f;
+  }();
+  return *files;
+}
+
+void BM_DecodePng1024x768(benchmark::State& state) {
+  const DecodeFiles& files = SharedFiles();
+  for (auto _ : state) benchmark::DoNotOptimize(ReadImage(files.png));
+}
+BENCHMARK(BM_DecodePng1024x768)->Unit(benchmark::kMillisecond);
+
+void BM_DecodeJpeg1024x768(benchmark::State& state) {
+  const DecodeFiles& files = SharedFiles();
+  for (auto _ : state) benchmark::DoNotOptimize(ReadImage(files.jpeg));
+}
+BENCHMARK(BM_DecodeJpeg1024x768)->Unit(benchmark::kMillisecond);
+
+// Sequential video decoding, per frame (reopening at the end is included, amortised).
+void DecodeVideo(benchmark::State& state, const std::string& path, int frames) {
+  std::unique_ptr<VideoReader> reader;
+  int next = frames;
+  for (auto _ : state) {
+    if (next == frames) {
+      reader = std::make_unique<VideoReader>(path);
+      next = 0;
+    }
+    benchmark::DoNotOptimize(reader->ReadFrame(next++));
+  }
+}
+void BM_DecodeVideoMjpeg1024x768(benchmark::State& state) {
+  DecodeVideo(state, SharedFiles().mjpg_video, SharedFiles().video_frames);
+}
+BENCHMARK(BM_DecodeVideoMjpeg1024x768)->Unit(benchmark::kMillisecond);
+void BM_DecodeVideoMpeg4_1024x768(benchmark::State& state) {
+  DecodeVideo(state, SharedFiles().mp4_video, SharedFiles().video_frames);
+}
+BENCHMARK(BM_DecodeVideoMpeg4_1024x768)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace confluent
+
+BENCHMARK_MAIN();

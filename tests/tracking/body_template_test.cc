@@ -1,0 +1,162 @@
+#include "tracking/body_template.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "core/bvh_io.h"
+#include "core/mesh_io.h"
+#include "core/mesh_ops.h"
+#include "core/mesh_validation.h"
+#include "tests/support/test_support.h"
+#include "tracking/motion_io.h"
+
+namespace confluent {
+namespace {
+
+// The faces of one segment as a mesh of its own.
+Mesh SegmentMesh(const Mesh& mesh, int segment) {
+  Mesh part;
+  part.vertices = mesh.vertices;
+  std::vector<Eigen::Vector3i> faces;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (mesh.face_labels[f] == segment) faces.push_back(mesh.faces.row(f).transpose());
+  part.faces.resize(faces.size(), 3);
+  for (std::size_t f = 0; f < faces.size(); ++f) part.faces.row(f) = faces[f].transpose();
+  return part;
+}
+
+TemplatePose SomePose() {
+  TemplatePose pose;
+  pose.root_translation = Eigen::Vector3d(0.3, -0.2, 0.05);
+  pose.root_rotation = Eigen::Vector3d(0.0, 0.1, 1.2);
+  pose.dofs[kTjSpine] = {-0.2, 0.05, 0.1};
+  pose.dofs[kTjLeftShoulder] = {0.3, 1.2, 0.1};
+  pose.dofs[kTjLeftElbow] = {1.0, 0, 0};
+  pose.dofs[kTjRightHip] = {0.8, 0.1, 0.0};
+  pose.dofs[kTjRightKnee] = {-1.1, 0, 0};
+  pose.dofs[kTjHead] = {0.2, 0.0, 0.4};
+  return pose;
+}
+
+TEST(BodyTemplate, HasThirtySevenDofsAndStudioJointNames) {
+  const BodyTemplate body;
+  EXPECT_EQ(body.num_dofs(), 37);
+  ASSERT_EQ(body.joint_names().size(), static_cast<std::size_t>(kNumTemplateJoints));
+  EXPECT_EQ(body.joint_names()[kTjLeftElbow], "left_elbow");
+  EXPECT_EQ(body.joint_names()[kTjRightToe], "right_toe");
+}
+
+TEST(BodyTemplate, EverySegmentIsWatertightAndOutward) {
+  const BodyTemplate body;
+  BodyShape shape;
+  shape.length_scale[int(BodySegment::kLeftThigh)] = 1.2;
+  shape.girth_scale[int(BodySegment::kUpperTorso)] = 0.8;
+  for (const TemplatePose& pose : {TemplatePose(), SomePose()}) {
+    const Mesh mesh = body.PosedMesh(shape, pose);
+    ASSERT_TRUE(mesh.has_face_labels());
+    EXPECT_GT(mesh.num_faces(), 2000);
+    EXPECT_LT(mesh.num_faces(), 8000);
+    for (int s = 0; s < kNumBodySegments; ++s) {
+      const Mesh part = SegmentMesh(mesh, s);
+      ASSERT_GT(part.num_faces(), 0) << BodySegmentName(s);
+      // Edge test: every directed edge appears once and its opposite once.
+      std::map<std::pair<int, int>, int> directed;
+      for (int f = 0; f < part.num_faces(); ++f)
+        for (int k = 0; k < 3; ++k) ++directed[{part.faces(f, k), part.faces(f, (k + 1) % 3)}];
+      for (const auto& [edge, count] : directed) {
+        EXPECT_EQ(count, 1) << BodySegmentName(s);
+        EXPECT_EQ(directed.count({edge.second, edge.first}), 1u) << BodySegmentName(s);
+      }
+      EXPECT_GT(SignedVolume(part), 1e-5) << BodySegmentName(s);
+    }
+  }
+}
+
+TEST(BodyTemplate, ForwardKinematicsMovesSegmentsRigidly) {
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(1.6);
+  const auto rest = body.RestPositions(shape);
+  const TemplatePose pose = SomePose();
+  const std::vector<Eigen::Vector3d> joints = body.JointPositions(shape, pose);
+  // Bone lengths are preserved.
+  for (int j = 1; j < kNumTemplateJoints; ++j) {
+    const int p = body.parents()[j];
+    EXPECT_NEAR((joints[j] - joints[p]).norm(), (rest[j] - rest[p]).norm(), 1e-9);
+  }
+  // The root moves by its translation at rest rotation.
+  TemplatePose shifted;
+  shifted.root_translation = Eigen::Vector3d(0.1, 0.2, 0.3);
+  EXPECT_NEAR((body.JointPositions(shape, shifted)[kTjPelvis] - rest[kTjPelvis] - shifted.root_translation).norm(), 0, 1e-12);
+  // A 90-degree knee flexion makes the shank perpendicular to the thigh.
+  TemplatePose knee;
+  knee.dofs[kTjLeftKnee] = {-M_PI / 2, 0, 0};
+  const auto kj = body.JointPositions(shape, knee);
+  const Eigen::Vector3d thigh = (kj[kTjLeftKnee] - kj[kTjLeftHip]).normalized();
+  const Eigen::Vector3d shank = (kj[kTjLeftAnkle] - kj[kTjLeftKnee]).normalized();
+  const double rest_angle = std::acos(((rest[kTjLeftKnee] - rest[kTjLeftHip]).normalized()).dot((rest[kTjLeftAnkle] - rest[kTjLeftKnee]).normalized()));
+  EXPECT_NEAR(std::acos(thigh.dot(shank)), M_PI / 2, rest_angle + 1e-6);
+  EXPECT_LT(shank.y(), 0.0);  // the shank folds backwards
+  // Vertices within a segment keep their mutual distances.
+  const Mesh a = body.PosedMesh(shape, TemplatePose()), b = body.PosedMesh(shape, pose);
+  const int per_segment = a.num_vertices() / kNumBodySegments;
+  for (int s = 0; s < kNumBodySegments; ++s)
+    for (int k = 1; k < per_segment; k += 7) {
+      const int v0 = s * per_segment, v1 = s * per_segment + k;
+      EXPECT_NEAR((a.vertices.row(v0) - a.vertices.row(v1)).norm(), (b.vertices.row(v0) - b.vertices.row(v1)).norm(), 1e-9);
+    }
+}
+
+TEST(BodyTemplate, ShapeScalesLengthsAndGirths) {
+  const BodyTemplate body;
+  BodyShape shape;
+  const auto rest0 = body.RestPositions(shape);
+  shape.length_scale[int(BodySegment::kRightForearm)] = 1.25;
+  const auto rest1 = body.RestPositions(shape);
+  EXPECT_NEAR((rest1[kTjRightWrist] - rest1[kTjRightElbow]).norm(), 1.25 * (rest0[kTjRightWrist] - rest0[kTjRightElbow]).norm(), 1e-12);
+  EXPECT_NEAR((rest1[kTjLeftWrist] - rest1[kTjLeftElbow]).norm(), (rest0[kTjLeftWrist] - rest0[kTjLeftElbow]).norm(), 1e-12);
+  BodyShape thick;
+  thick.girth_scale[int(BodySegment::kHead)] = 1.5;
+  const double v0 = SignedVolume(SegmentMesh(body.PosedMesh(BodyShape(), TemplatePose()), int(BodySegment::kHead)));
+  const double v1 = SignedVolume(SegmentMesh(body.PosedMesh(thick, TemplatePose()), int(BodySegment::kHead)));
+  EXPECT_NEAR(v1 / v0, 1.5 * 1.5 * 1.5, 0.01);  // radii and caps scale with girth
+}
+
+TEST(BodyTemplate, ExportsPlyWithSegmentLabels) {
+  const testing::TempDir dir;
+  const BodyTemplate body;
+  const Mesh mesh = body.PosedMesh(BodyShape(), SomePose());
+  WriteMesh(dir / "t.ply", mesh);
+  const Mesh back = ReadMesh(dir / "t.ply");
+  ASSERT_EQ(back.num_faces(), mesh.num_faces());
+  ASSERT_TRUE(back.has_face_labels());
+  for (int f = 0; f < mesh.num_faces(); f += 97) EXPECT_EQ(back.face_labels[f], mesh.face_labels[f]);
+  EXPECT_NEAR((back.vertices - mesh.vertices).cwiseAbs().maxCoeff(), 0.0, 1e-5);
+  WriteMesh(dir / "t.obj", mesh);
+  EXPECT_EQ(ReadMesh(dir / "t.obj").num_faces(), mesh.num_faces());
+}
+
+TEST(BodyTemplate, BvhRoundTripsThroughOurReader) {
+  const testing::TempDir dir;
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(1.8);
+  const Skeleton skeleton = body.MakeSkeleton(shape);
+  std::vector<Pose> poses = {body.ToPose(TemplatePose()), body.ToPose(SomePose())};
+  WriteBvh(dir / "m.bvh", skeleton, poses, 0.04);
+  BvhReadOptions options;
+  options.scale = 0.01;
+  options.y_up_to_z_up = true;
+  const BvhMotion motion = ReadBvh(dir / "m.bvh", options);
+  ASSERT_EQ(motion.frames.size(), poses.size());
+  ASSERT_EQ(motion.skeleton.size(), skeleton.size());
+  EXPECT_NEAR(motion.frame_time_s, 0.04, 1e-9);
+  for (std::size_t f = 0; f < poses.size(); ++f) {
+    const auto expected = JointPositions(skeleton, poses[f]);
+    const auto actual = JointPositions(motion.skeleton, motion.frames[f]);
+    for (int j = 0; j < skeleton.size(); ++j) EXPECT_NEAR((expected[j] - actual[j]).norm(), 0.0, 1e-4) << j;
+  }
+}
+
+}  // namespace
+}  // namespace confluent

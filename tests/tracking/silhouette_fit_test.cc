@@ -1,0 +1,136 @@
+#include "tracking/silhouette_fit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "calib/rig_check.h"
+#include "tracking/overlap.h"
+#include "tracking/tracker.h"
+
+namespace confluent {
+namespace {
+
+// A camera at `center` looking at `target`, image y down along -z.
+Camera LookAt(const std::string& name, const Eigen::Vector3d& center, const Eigen::Vector3d& target, int width, int height) {
+  Camera camera;
+  camera.name = name;
+  camera.width = width;
+  camera.height = height;
+  const double f = 1.1 * width;
+  camera.K << f, 0, (width - 1) / 2.0, 0, f, (height - 1) / 2.0, 0, 0, 1;
+  const Eigen::Vector3d z = (target - center).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  camera.rotation.row(0) = x.transpose();
+  camera.rotation.row(1) = y.transpose();
+  camera.rotation.row(2) = z.transpose();
+  camera.translation = -camera.rotation * center;
+  return camera;
+}
+
+Rig RingRig(int n, int width, int height) {
+  Rig rig;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n + 0.2;
+    rig.cameras.push_back(LookAt("cam" + std::to_string(i), Eigen::Vector3d(3.6 * std::sin(a), 3.6 * std::cos(a), 1.5 + 0.4 * (i % 2)),
+                                 Eigen::Vector3d(0, 0, 1.0), width, height));
+  }
+  return rig;
+}
+
+TemplatePose TruePose() {
+  TemplatePose pose;
+  pose.root_translation = Eigen::Vector3d(0.05, -0.1, 0.0);
+  pose.root_rotation = Eigen::Vector3d(0, 0, 0.5);
+  pose.dofs[kTjSpine] = {-0.15, 0.05, 0.1};
+  pose.dofs[kTjLeftShoulder] = {0.4, 0.9, 0.0};
+  pose.dofs[kTjLeftElbow] = {0.8, 0, 0};
+  pose.dofs[kTjRightShoulder] = {-0.3, -0.5, 0.0};
+  pose.dofs[kTjRightElbow] = {0.4, 0, 0};
+  pose.dofs[kTjLeftHip] = {0.5, 0.1, 0.0};
+  pose.dofs[kTjLeftKnee] = {-0.7, 0, 0};
+  pose.dofs[kTjRightHip] = {-0.1, -0.1, 0.0};
+  pose.dofs[kTjHead] = {0.1, 0.0, 0.3};
+  return pose;
+}
+
+double MeanJointError(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& a, const TemplatePose& b) {
+  const auto ja = body.JointPositions(shape, a), jb = body.JointPositions(shape, b);
+  double sum = 0;
+  for (std::size_t j = 0; j < ja.size(); ++j) sum += (ja[j] - jb[j]).norm();
+  return sum / ja.size();
+}
+
+TEST(SilhouetteFit, RecoversAKnownPoseFromAPerturbedStart) {
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(1.7);
+  const Rig rig = RingRig(6, 320, 240);
+  const TemplatePose truth = TruePose();
+  const Mesh mesh = body.PosedMesh(shape, truth);
+  std::vector<Image> masks;
+  for (const Camera& camera : rig.cameras) masks.push_back(RasterizeSilhouette(mesh, camera, 1));
+  // Perturb every DOF and the root.
+  TemplatePose start = truth;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> angle(-0.15, 0.15);
+  for (int j = 1; j < kNumTemplateJoints; ++j)
+    for (int k = 0; k < body.dofs()[j].num_dof(); ++k) start.dofs[j][k] += angle(rng);
+  start.root_translation += Eigen::Vector3d(0.04, -0.03, 0.02);
+  start.root_rotation.z() += 0.1;
+  body.ClampToLimits(&start);
+  const double start_error = MeanJointError(body, shape, start, truth);
+  EXPECT_GT(start_error, 0.03);
+  SilhouetteFitOptions options;
+  options.downscale = 1;
+  options.max_contour_points = 300;
+  options.rounds = 4;
+  options.max_iterations = 30;
+  options.prior_weight = 0.0;
+  const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
+  EXPECT_EQ(observations.num_used_cameras(), 6);
+  BodyShape fitted_shape = shape;
+  TemplatePose pose = start;
+  const SilhouetteFitSummary summary = FitTemplateToSilhouettes(body, observations, options, &fitted_shape, &pose);
+  const double error = MeanJointError(body, shape, pose, truth);
+  EXPECT_LT(error, 0.01) << "start " << start_error << " iterations " << summary.iterations;
+  EXPECT_LT(summary.mean_outside_px, 0.5);
+  // The overlap is near perfect in every camera.
+  const Mesh fitted = body.PosedMesh(shape, pose);
+  for (std::size_t c = 0; c < rig.cameras.size(); ++c)
+    EXPECT_GT(MaskIoU(RasterizeSilhouette(fitted, rig.cameras[c], 1), masks[c]), 0.93) << c;
+}
+
+TEST(SilhouetteFit, InitialisesShapeAndPoseFromTheVisualHull) {
+  const BodyTemplate body;
+  BodyShape truth_shape = BodyShape::Uniform(1.65);
+  truth_shape.girth_scale[int(BodySegment::kUpperTorso)] *= 1.1;
+  truth_shape.length_scale[int(BodySegment::kLeftThigh)] *= 1.05;
+  truth_shape.length_scale[int(BodySegment::kRightThigh)] *= 1.05;
+  const Rig rig = RingRig(6, 320, 240);
+  TemplatePose truth;
+  truth.root_translation = Eigen::Vector3d(0.2, 0.1, 0.0);
+  truth.root_rotation = Eigen::Vector3d(0, 0, 2.2);
+  truth.dofs[kTjLeftShoulder] = {0.0, 0.8, 0.0};  // nearly a T-pose
+  truth.dofs[kTjRightShoulder] = {0.0, -0.8, 0.0};
+  const Mesh mesh = body.PosedMesh(truth_shape, truth);
+  std::vector<Image> masks;
+  for (const Camera& camera : rig.cameras) masks.push_back(RasterizeSilhouette(mesh, camera, 1));
+  const HullPlacement placement = EstimatePlacementFromHull(rig, masks, {});
+  ASSERT_TRUE(placement.ok);
+  EXPECT_NEAR(placement.height_m, 1.65, 0.1);
+  EXPECT_NEAR(placement.floor_z, 0.0, 0.06);
+  Tracker tracker(rig, {});
+  const TrackedFrame result = tracker.Initialize(0, masks);
+  ASSERT_TRUE(tracker.initialized());
+  const auto joints = tracker.body().JointPositions(tracker.shape(), result.pose);
+  const auto expected = body.JointPositions(truth_shape, truth);
+  double sum = 0;
+  for (std::size_t j = 0; j < joints.size(); ++j) sum += (joints[j] - expected[j]).norm();
+  EXPECT_LT(sum / joints.size(), 0.03);
+  EXPECT_GT(result.mean_iou, 0.9);
+}
+
+}  // namespace
+}  // namespace confluent

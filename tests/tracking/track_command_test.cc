@@ -1,0 +1,55 @@
+// End to end: `confluent synth --preset tiny`, then `confluent track` on its ground-truth masks
+// with the held-out cameras excluded; joint error against the studio skeleton's joints.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/bvh_io.h"
+#include "core/mesh_io.h"
+#include "tests/support/test_support.h"
+
+namespace confluent {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(TrackCommand, TracksTheTinyStudioCapture) {
+  const testing::TempDir dir;
+  const std::string capture = dir / "cap";
+  const testing::CommandResult synth = testing::RunConfluent({"synth", "--preset", "tiny", "--out", capture});
+  ASSERT_EQ(synth.exit_code, 0) << synth.stderr_text;
+  const std::string gt = capture + "_gt";
+  const std::string run = dir / "run";
+  const testing::CommandResult track =
+      testing::RunConfluent({"track", capture, "--masks", gt + "/masks", "--exclude-camera", "holdout0", "--exclude-camera",
+                             "holdout1", "--gt-joints", gt + "/joints.json", "--out", run});
+  ASSERT_EQ(track.exit_code, 0) << track.stderr_text << track.stdout_text;
+  EXPECT_NE(track.stdout_text.find("frame 000009"), std::string::npos) << track.stdout_text;
+  const nlohmann::json summary = nlohmann::json::parse(ReadTextFile(run + "/track_summary.json"));
+  EXPECT_EQ(summary.at("frames").get<int>(), 10);
+  // Loose thresholds: 160x120 images, 4 cameras.
+  EXPECT_LT(summary.at("joint_error_mean_m").get<double>(), 0.07) << track.stdout_text;
+  EXPECT_GT(summary.at("heldout_iou_mean").get<double>(), 0.6) << track.stdout_text;
+  const nlohmann::json poses = nlohmann::json::parse(ReadTextFile(run + "/poses.json"));
+  ASSERT_EQ(poses.at("frames").size(), 10u);
+  EXPECT_EQ(poses.at("frames")[3].at("joint_positions").size(), 22u);
+  EXPECT_TRUE(poses.at("shape").at("length_scale").contains("left_forearm"));
+  BvhReadOptions options;
+  options.scale = 0.01;
+  options.y_up_to_z_up = true;
+  const BvhMotion motion = ReadBvh(run + "/motion.bvh", options);
+  EXPECT_EQ(motion.frames.size(), 10u);
+  const Mesh mesh = ReadMesh(run + "/template/000009.ply");
+  EXPECT_TRUE(mesh.has_face_labels());
+  EXPECT_TRUE(fs::exists(run + "/overlays/holdout0/000000.png"));
+
+  // Unknown camera names are usage errors.
+  const testing::CommandResult bad = testing::RunConfluent({"track", capture, "--masks", gt + "/masks", "--exclude-camera", "nope", "--out", dir / "run2"});
+  EXPECT_NE(bad.exit_code, 0);
+}
+
+}  // namespace
+}  // namespace confluent

@@ -1,0 +1,26 @@
+#pragma once
+// Writing the tracker's results: poses.json and BVH.
+
+#include <string>
+#include <vector>
+
+#include "core/skeleton.h"
+#include "tracking/body_template.h"
+#include "tracking/tracker.h"
+
+namespace confluent {
+
+// Writes a BVH file (Y-up, centimetres, as most BVH tools expect): root with 6 channels
+// (Xposition Yposition Zposition Zrotation Xrotation Yrotation), other joints with 3
+// rotation channels (Z X Y), childless joints as End Sites. `skeleton` and `poses` are in the
+// world frame (Z up, metres); read it back with ReadBvh({scale = 0.01, y_up_to_z_up = true}).
+// Written atomically; throws OutputError on failure.
+void WriteBvh(const std::string& path, const Skeleton& skeleton, const std::vector<Pose>& poses, double frame_time_s);
+
+// Writes poses.json: joint names and parents, DOF layout with limits, fitted shape, and per
+// frame the root, joint angles (radians), local rotations (w x y z), world joint positions
+// (m), overlap per camera and flags. `camera_names` labels TrackedFrame::camera_iou.
+void WritePosesJson(const std::string& path, const BodyTemplate& body, const BodyShape& shape,
+                    const std::vector<std::string>& camera_names, const std::vector<TrackedFrame>& frames, double fps);
+
+}  // namespace confluent

@@ -1,0 +1,67 @@
+#include "tracking/overlap.h"
+
+#include <algorithm>
+#include <opencv2/imgproc.hpp>
+
+#include "calib/capture.h"
+#include "core/cv_interop.h"
+
+namespace confluent {
+
+Image RasterizeSilhouette(const Mesh& mesh, const Camera& camera, int downscale) {
+  downscale = std::max(1, downscale);
+  const int width = std::max(1, camera.width / downscale), height = std::max(1, camera.height / downscale);
+  Image out(width, height, 1);
+  cv::Mat target = AsCvMat(out);
+  const double sx = static_cast<double>(width) / camera.width, sy = static_cast<double>(height) / camera.height;
+  constexpr int kShift = 4;
+  const double fixed = 1 << kShift;
+  std::vector<cv::Point> projected(mesh.num_vertices());
+  std::vector<char> valid(mesh.num_vertices(), 0);
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    Eigen::Vector2d pixel;
+    if (!camera.ProjectChecked(mesh.vertices.row(v).transpose(), &pixel)) continue;
+    const double x = ((pixel.x() + 0.5) * sx - 0.5) * fixed, y = ((pixel.y() + 0.5) * sy - 0.5) * fixed;
+    if (std::abs(x) > 1e8 || std::abs(y) > 1e8) continue;
+    projected[v] = cv::Point(static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y)));
+    valid[v] = 1;
+  }
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int a = mesh.faces(f, 0), b = mesh.faces(f, 1), c = mesh.faces(f, 2);
+    if (!valid[a] || !valid[b] || !valid[c]) continue;
+    const cv::Point triangle[3] = {projected[a], projected[b], projected[c]};
+    cv::fillConvexPoly(target, triangle, 3, cv::Scalar(255), cv::LINE_8, kShift);
+  }
+  return out;
+}
+
+Image DownscaleMask(const Image& mask, int downscale) {
+  if (downscale <= 1) return mask;
+  const int width = std::max(1, mask.width / downscale), height = std::max(1, mask.height / downscale);
+  cv::Mat small;
+  cv::resize(AsCvMat(mask), small, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+  cv::threshold(small, small, 127, 255, cv::THRESH_BINARY);
+  return ImageFromCvMat(small);
+}
+
+long CountForeground(const Image& mask) {
+  if (mask.empty()) return 0;
+  return cv::countNonZero(AsCvMat(mask));
+}
+
+Image DrawSilhouetteOverlay(const Image& image, const Image& rendered, const Image* mask) {
+  Image rgb = ToRgb8(image);
+  cv::Mat canvas = AsCvMat(rgb);
+  auto outline = [&](const Image& m, const cv::Scalar& color) {
+    cv::Mat binary = AsCvMat(m).clone();
+    if (binary.size() != canvas.size()) cv::resize(binary, binary, canvas.size(), 0, 0, cv::INTER_NEAREST);
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(binary, contours, cv::RETR_LIST, cv::CHAIN_APPROX_SIMPLE);
+    cv::drawContours(canvas, contours, -1, color, std::max(1, canvas.cols / 512), cv::LINE_AA);
+  };
+  if (mask && !mask->empty()) outline(*mask, cv::Scalar(0, 255, 0));
+  outline(rendered, cv::Scalar(255, 40, 40));
+  return rgb;
+}
+
+}  // namespace confluent

@@ -1,0 +1,29 @@
+#pragma once
+// Template-to-silhouette overlap without GL: the posed template's triangles are projected and
+// filled (software rasterisation), then compared with the masks.
+
+#include <vector>
+
+#include "calib/camera.h"
+#include "core/image.h"
+#include "core/mesh.h"
+
+namespace confluent {
+
+// The silhouette of `mesh` in `camera` as a 1-channel 0/255 mask of size
+// (camera.width / downscale) x (camera.height / downscale). Triangles with a vertex behind the
+// camera are skipped. Distortion is respected per vertex.
+Image RasterizeSilhouette(const Mesh& mesh, const Camera& camera, int downscale = 1);
+
+// `mask` reduced by `downscale` (area average, thresholded at 50%), 0/255.
+Image DownscaleMask(const Image& mask, int downscale);
+
+// Number of foreground (non-zero) pixels of a 1-channel 8-bit mask.
+long CountForeground(const Image& mask);
+
+// The image (converted to 8-bit RGB) with the outline of `rendered` (a 0/255 mask, e.g. from
+// RasterizeSilhouette, resized to the image when smaller) drawn in red and, when `mask` is
+// given, the outline of the mask drawn in green.
+Image DrawSilhouetteOverlay(const Image& image, const Image& rendered, const Image* mask = nullptr);
+
+}  // namespace confluent

@@ -1,0 +1,513 @@
+// The one translation unit with Ceres autodiff cost functors of the tracker.
+
+#include "tracking/silhouette_fit.h"
+
+#include <ceres/ceres.h>
+#include <ceres/cubic_interpolation.h>
+#include <ceres/normal_prior.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "core/cv_interop.h"
+#include "core/error.h"
+#include "tracking/body_model_impl.h"
+
+namespace confluent {
+
+namespace ti = tracking_internal;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+void SilhouetteFitOptions::Check() const {
+  if (downscale < 0 || downscale > 16) throw UsageError("tracking: downscale must be in [0, 16]");
+  if (max_contour_points < 0) throw UsageError("tracking: max_contour_points must be >= 0");
+  if (rounds < 1 || max_iterations < 1) throw UsageError("tracking: rounds and max_iterations must be >= 1");
+  if (!(model_to_image_loss_px > 0) || !(image_to_model_loss_px > 0))
+    throw UsageError("tracking: loss scales must be positive");
+  if (!(image_to_model_weight >= 0) || !(prior_weight >= 0) || !(shape_prior_weight >= 0))
+    throw UsageError("tracking: weights must be non-negative");
+  if (num_threads < 1) throw UsageError("tracking: num_threads must be >= 1");
+}
+
+// One camera prepared for fitting.
+struct PreparedView {
+  Camera camera;
+  double scale = 1.0;                 // full-resolution pixels per reduced pixel
+  int rows = 0, cols = 0;
+  std::vector<float> signed_distance;  // reduced px, positive outside the silhouette
+  std::unique_ptr<ceres::Grid2D<float, 1>> grid;
+  std::unique_ptr<ceres::BiCubicInterpolator<ceres::Grid2D<float, 1>>> interpolator;
+  std::vector<Vector3d> ray_origins, ray_directions;  // contour pixels, world
+};
+
+struct SilhouetteObservations::Impl {
+  std::vector<PreparedView> views;
+};
+
+SilhouetteObservations::SilhouetteObservations(const Rig& rig, const std::vector<Image>& masks,
+                                               const std::vector<bool>& use_camera, int downscale,
+                                               int max_contour_points)
+    : impl_(std::make_unique<Impl>()) {
+  for (int c = 0; c < rig.size(); ++c) {
+    if (!use_camera.empty() && !use_camera[c]) continue;
+    if (c >= static_cast<int>(masks.size()) || masks[c].empty()) continue;
+    const Image& mask = masks[c];
+    PreparedView view;
+    view.camera = rig.cameras[c];
+    const int factor = downscale > 0 ? downscale : std::max(1, static_cast<int>(std::lround(mask.width / 256.0)));
+    cv::Mat full = AsCvMat(mask);
+    cv::Mat small;
+    view.cols = std::max(1, mask.width / factor);
+    view.rows = std::max(1, mask.height / factor);
+    view.scale = static_cast<double>(mask.width) / view.cols;
+    cv::resize(full, small, cv::Size(view.cols, view.rows), 0, 0, cv::INTER_AREA);
+    cv::threshold(small, small, 127, 255, cv::THRESH_BINARY);
+    cv::Mat inside, outside, not_small;
+    cv::bitwise_not(small, not_small);
+    cv::distanceTransform(small, inside, cv::DIST_L2, 3);        // inside: distance to the background
+    cv::distanceTransform(not_small, outside, cv::DIST_L2, 3);   // outside: distance to the silhouette
+    view.signed_distance.resize(static_cast<std::size_t>(view.rows) * view.cols);
+    for (int y = 0; y < view.rows; ++y)
+      for (int x = 0; x < view.cols; ++x)
+        view.signed_distance[y * view.cols + x] = std::min(outside.at<float>(y, x), 60.0f) - inside.at<float>(y, x);
+    view.grid = std::make_unique<ceres::Grid2D<float, 1>>(view.signed_distance.data(), 0, view.rows, 0, view.cols);
+    view.interpolator = std::make_unique<ceres::BiCubicInterpolator<ceres::Grid2D<float, 1>>>(*view.grid);
+    // Contour pixels: inside pixels with a 4-neighbour outside.
+    std::vector<Eigen::Vector2i> contour;
+    for (int y = 0; y < view.rows; ++y)
+      for (int x = 0; x < view.cols; ++x) {
+        if (!small.at<uchar>(y, x)) continue;
+        const bool edge = x == 0 || y == 0 || x + 1 == view.cols || y + 1 == view.rows || !small.at<uchar>(y, x - 1) ||
+                          !small.at<uchar>(y, x + 1) || !small.at<uchar>(y - 1, x) || !small.at<uchar>(y + 1, x);
+        if (edge) contour.emplace_back(x, y);
+      }
+    const double step = contour.size() > static_cast<std::size_t>(max_contour_points)
+                            ? static_cast<double>(contour.size()) / std::max(1, max_contour_points)
+                            : 1.0;
+    for (double i = 0; i < contour.size() && max_contour_points > 0; i += step) {
+      const Eigen::Vector2i& p = contour[static_cast<std::size_t>(i)];
+      const Eigen::Vector2d pixel((p.x() + 0.5) * view.scale - 0.5, (p.y() + 0.5) * view.scale - 0.5);
+      view.ray_origins.push_back(view.camera.center_in_world());
+      view.ray_directions.push_back(view.camera.RayInWorld(pixel));
+    }
+    impl_->views.push_back(std::move(view));
+  }
+}
+
+SilhouetteObservations::~SilhouetteObservations() = default;
+SilhouetteObservations::SilhouetteObservations(SilhouetteObservations&&) noexcept = default;
+SilhouetteObservations& SilhouetteObservations::operator=(SilhouetteObservations&&) noexcept = default;
+int SilhouetteObservations::num_used_cameras() const { return static_cast<int>(impl_->views.size()); }
+
+namespace {
+
+constexpr int kShapeBlockSize = 2 * ti::kNumShapeGroups;
+
+// Residuals of one segment in one camera: model -> image samples and/or image -> model rays.
+// Parameter blocks: root translation (3), root rotation vector (3), the DOF blocks of the
+// joints on the segment's chain (root to segment joint), then the shape block (20).
+struct SegmentCost {
+  const BodyTemplate* body = nullptr;
+  const PreparedView* view = nullptr;
+  int segment = 0;
+  Matrix3d root_reference = Matrix3d::Identity();
+  std::vector<int> chain_joints;           // joints with DOFs, in parameter-block order
+  std::vector<SurfaceCoord> samples;       // model -> image
+  std::vector<int> rays;                   // image -> model: indices into view rays
+  double ray_weight = 1.0;                 // reduced px per metre at the body, times the term weight
+
+  template <typename T>
+  bool operator()(T const* const* p, T* residuals) const {
+    const T* root_t = p[0];
+    const T* root_aa = p[1];
+    const T* jp[kNumTemplateJoints] = {};
+    for (std::size_t i = 0; i < chain_joints.size(); ++i) jp[chain_joints[i]] = p[2 + i];
+    const T* shape = p[2 + chain_joints.size()];
+    T length[kNumBodySegments], girth[kNumBodySegments];
+    for (int s = 0; s < kNumBodySegments; ++s) {
+      length[s] = shape[ti::kSegmentGroup[s]];
+      girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
+    }
+    std::array<ti::Vec3<T>, kNumTemplateJoints> rest;
+    ti::RestPositions(*body, length, girth, &rest);
+    const int joint = body->segments()[segment].joint;
+    ti::Mat3<T> R;
+    ti::Vec3<T> P;
+    ti::JointWorldTransform(*body, joint, rest, root_t, root_aa, root_reference, jp, &R, &P);
+    const ti::SegmentFrame<T> frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth);
+    const Camera& cam = view->camera;
+    const Matrix3d& Rc = cam.rotation;
+    const Vector3d& tc = cam.translation;
+    const double k1 = cam.dist(0), k2 = cam.dist(1), p1 = cam.dist(2), p2 = cam.dist(3), k3 = cam.dist(4);
+    const double inv_scale = 1.0 / view->scale;
+    int r = 0;
+    for (const SurfaceCoord& sc : samples) {
+      const ti::Vec3<T> X = P + R * (frame.Point(sc) - rest[joint]);
+      const ti::Vec3<T> Xc = Rc.cast<T>() * X + tc.cast<T>();
+      if (Xc.z() < T(1e-3)) {
+        residuals[r++] = T(0.0);
+        continue;
+      }
+      const T x = Xc.x() / Xc.z(), y = Xc.y() / Xc.z();
+      const T r2 = x * x + y * y;
+      const T radial = T(1.0) + r2 * (T(k1) + r2 * (T(k2) + r2 * T(k3)));
+      const T xd = x * radial + T(2.0 * p1) * x * y + T(p2) * (r2 + T(2.0) * x * x);
+      const T yd = y * radial + T(p1) * (r2 + T(2.0) * y * y) + T(2.0 * p2) * x * y;
+      const T u = T(cam.K(0, 0)) * xd + T(cam.K(0, 1)) * yd + T(cam.K(0, 2));
+      const T v = T(cam.K(1, 1)) * yd + T(cam.K(1, 2));
+      const T us = (u + T(0.5)) * T(inv_scale) - T(0.5);
+      const T vs = (v + T(0.5)) * T(inv_scale) - T(0.5);
+      T sd;
+      view->interpolator->Evaluate(vs, us, &sd);
+      residuals[r++] = sd > T(-0.5) ? sd + T(0.5) : T(0.0);
+    }
+    if (!rays.empty()) {
+      const ti::Vec3<T> a = P + R * (frame.a - rest[joint]);
+      const ti::Vec3<T> axis = R * frame.axis, e1 = R * frame.e1, e2 = R * frame.e2;
+      for (int index : rays) {
+        const ti::Vec3<T> o = view->ray_origins[index].cast<T>() - a;
+        const ti::Vec3<T> d = view->ray_directions[index].cast<T>();
+        const T oz = o.dot(axis), ox = o.dot(e1), oy = o.dot(e2);
+        const T dz = d.dot(axis), dx = d.dot(e1), dy = d.dot(e2);
+        const T d_o = dx * ox + dy * oy + dz * oz;
+        const T denom = T(1.0) - dz * dz;
+        T s = denom > T(1e-6) ? (oz - dz * d_o) / denom : oz;
+        bool clamped = false;
+        if (s < T(0.0)) { s = T(0.0); clamped = true; }
+        if (s > frame.length) { s = frame.length; clamped = true; }
+        const T f = s / frame.length;
+        const T rx = frame.rax + (frame.rbx - frame.rax) * f, ry = frame.ray + (frame.rby - frame.ray) * f;
+        const T qz0 = oz - s;
+        const T inv_cap = clamped ? T(1.0) / (qz0 < T(0.0) ? frame.cap_a : frame.cap_b) : T(0.0);
+        const ti::Vec3<T> av(ox / rx, oy / ry, qz0 * inv_cap), bv(dx / rx, dy / ry, dz * inv_cap);
+        const T tau = -av.dot(bv) / (bv.dot(bv) + T(1e-12));
+        const ti::Vec3<T> q = av + tau * bv;
+        const T nd = sqrt(q.squaredNorm() + T(1e-12));
+        residuals[r++] = (nd - T(1.0)) * T(0.5) * (rx + ry) * T(ray_weight);
+      }
+    }
+    return true;
+  }
+};
+
+// Normalised distance of a ray to a segment capsule (double version for the assignment).
+double RayCapsuleDistance(const ti::SegmentFrame<double>& frame, const Vector3d& a, const Vector3d& axis,
+                          const Vector3d& e1, const Vector3d& e2, const Vector3d& origin, const Vector3d& direction) {
+  const Vector3d o = origin - a;
+  const double oz = o.dot(axis), ox = o.dot(e1), oy = o.dot(e2);
+  const double dz = direction.dot(axis), dx = direction.dot(e1), dy = direction.dot(e2);
+  const double d_o = dx * ox + dy * oy + dz * oz;
+  const double denom = 1.0 - dz * dz;
+  double s = denom > 1e-6 ? (oz - dz * d_o) / denom : oz;
+  bool clamped = false;
+  if (s < 0) { s = 0; clamped = true; }
+  if (s > frame.length) { s = frame.length; clamped = true; }
+  const double f = s / frame.length;
+  const double rx = frame.rax + (frame.rbx - frame.rax) * f, ry = frame.ray + (frame.rby - frame.ray) * f;
+  const double qz0 = oz - s;
+  const double inv_cap = clamped ? 1.0 / (qz0 < 0 ? frame.cap_a : frame.cap_b) : 0.0;
+  const Vector3d av(ox / rx, oy / ry, qz0 * inv_cap), bv(dx / rx, dy / ry, dz * inv_cap);
+  const double tau = -av.dot(bv) / (bv.dot(bv) + 1e-12);
+  return (av + tau * bv).norm();
+}
+
+// The parameter vectors of a fit.
+struct FitParams {
+  double root_t[3];
+  double root_aa[3] = {0, 0, 0};
+  Matrix3d root_reference;
+  std::array<std::array<double, 3>, kNumTemplateJoints> dofs;
+  double shape[kShapeBlockSize];
+};
+
+void ShapeArrays(const double* shape, double* length, double* girth) {
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    length[s] = shape[ti::kSegmentGroup[s]];
+    girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
+  }
+}
+
+// World frames of all segments for the current parameters.
+struct SegmentWorld {
+  ti::SegmentFrame<double> frame;
+  Vector3d a, axis, e1, e2;
+  Matrix3d R;
+  Vector3d P;
+};
+
+std::array<SegmentWorld, kNumBodySegments> SegmentsInWorld(const BodyTemplate& body, const FitParams& fp) {
+  double length[kNumBodySegments], girth[kNumBodySegments];
+  ShapeArrays(fp.shape, length, girth);
+  std::array<Vector3d, kNumTemplateJoints> rest;
+  ti::RestPositions(body, length, girth, &rest);
+  const double* jp[kNumTemplateJoints];
+  for (int j = 0; j < kNumTemplateJoints; ++j) jp[j] = fp.dofs[j].data();
+  std::array<SegmentWorld, kNumBodySegments> out;
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    SegmentWorld& w = out[s];
+    const int joint = body.segments()[s].joint;
+    ti::JointWorldTransform(body, joint, rest, fp.root_t, fp.root_aa, fp.root_reference, jp, &w.R, &w.P);
+    w.frame = ti::MakeSegmentFrame(body, s, rest, length, girth);
+    w.a = w.P + w.R * (w.frame.a - rest[joint]);
+    w.axis = w.R * w.frame.axis;
+    w.e1 = w.R * w.frame.e1;
+    w.e2 = w.R * w.frame.e2;
+  }
+  return out;
+}
+
+bool IsCoarseSegment(int s) {
+  return s == int(BodySegment::kHead) || s == int(BodySegment::kNeck) || s == int(BodySegment::kUpperTorso) ||
+         s == int(BodySegment::kLowerTorso) || s == int(BodySegment::kLeftThigh) || s == int(BodySegment::kRightThigh);
+}
+
+bool IsCoarseJoint(int j) { return j == kTjSpine || j == kTjChest || j == kTjLeftHip || j == kTjRightHip; }
+
+// One Ceres solve over the segments/joints selected by `coarse`.
+void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& obs, const SilhouetteFitOptions& options,
+                bool coarse, bool fit_shape, FitParams* fp, const FitParams& prior, const double* shape_prior,
+                SilhouetteFitSummary* summary, bool first) {
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  const auto segments = SegmentsInWorld(body, *fp);
+  // Chains of each segment.
+  std::array<std::vector<int>, kNumBodySegments> chains;
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    std::vector<int> chain;
+    for (int j = body.segments()[s].joint; j > 0; j = body.parents()[j])
+      if (body.dofs()[j].type != JointType::kFixed) chain.push_back(j);
+    std::reverse(chain.begin(), chain.end());
+    chains[s] = chain;
+  }
+  const Vector3d body_center = segments[int(BodySegment::kLowerTorso)].a;
+  for (const PreparedView& view : obs.views) {
+    // Image -> model: assign each contour ray to its nearest segment.
+    std::array<std::vector<int>, kNumBodySegments> assigned;
+    for (std::size_t i = 0; i < view.ray_origins.size(); ++i) {
+      int best = -1;
+      double best_d = 1e18;
+      for (int s = 0; s < kNumBodySegments; ++s) {
+        const SegmentWorld& w = segments[s];
+        const double d = RayCapsuleDistance(w.frame, w.a, w.axis, w.e1, w.e2, view.ray_origins[i], view.ray_directions[i]);
+        if (d < best_d) {
+          best_d = d;
+          best = s;
+        }
+      }
+      if (best >= 0 && (!coarse || IsCoarseSegment(best))) assigned[best].push_back(static_cast<int>(i));
+    }
+    const double depth = std::max(0.3, view.camera.PointInCamera(body_center).z());
+    const double px_per_m = 0.5 * (view.camera.K(0, 0) + view.camera.K(1, 1)) / view.scale / depth;
+    for (int s = 0; s < kNumBodySegments; ++s) {
+      if (coarse && !IsCoarseSegment(s)) continue;
+      for (int kind = 0; kind < 2; ++kind) {
+        if (kind == 1 && (assigned[s].empty() || options.image_to_model_weight <= 0)) continue;
+        auto* functor = new SegmentCost;
+        functor->body = &body;
+        functor->view = &view;
+        functor->segment = s;
+        functor->root_reference = fp->root_reference;
+        functor->chain_joints = chains[s];
+        if (kind == 0)
+          functor->samples = body.sample_coords();
+        else
+          functor->rays = assigned[s];
+        functor->ray_weight = px_per_m * options.image_to_model_weight;
+        const int num_residuals = kind == 0 ? static_cast<int>(functor->samples.size()) : static_cast<int>(functor->rays.size());
+        auto* cost = new ceres::DynamicAutoDiffCostFunction<SegmentCost, 18>(functor);
+        std::vector<double*> blocks = {fp->root_t, fp->root_aa};
+        cost->AddParameterBlock(3);
+        cost->AddParameterBlock(3);
+        for (int j : chains[s]) {
+          cost->AddParameterBlock(body.dofs()[j].num_dof());
+          blocks.push_back(fp->dofs[j].data());
+        }
+        cost->AddParameterBlock(kShapeBlockSize);
+        blocks.push_back(fp->shape);
+        cost->SetNumResiduals(num_residuals);
+        ceres::LossFunction* loss = kind == 0 ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(options.model_to_image_loss_px))
+                                              : new ceres::CauchyLoss(options.image_to_model_loss_px);
+        problem.AddResidualBlock(cost, loss, blocks);
+      }
+    }
+  }
+  if (problem.NumResidualBlocks() == 0) return;
+  // Priors and bounds.
+  for (int j = 1; j < kNumTemplateJoints; ++j) {
+    const int n = body.dofs()[j].num_dof();
+    if (n == 0 || !problem.HasParameterBlock(fp->dofs[j].data())) continue;
+    double* block = fp->dofs[j].data();
+    if (!options.fit_pose || (coarse && !IsCoarseJoint(j))) {
+      problem.SetParameterBlockConstant(block);
+      continue;
+    }
+    if (options.prior_weight > 0) {
+      Eigen::MatrixXd A = Eigen::MatrixXd::Identity(n, n) * options.prior_weight;
+      Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(prior.dofs[j].data(), n);
+      problem.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, block);
+    }
+    for (int k = 0; k < n; ++k) {
+      block[k] = std::clamp(block[k], body.dofs()[j].lower[k], body.dofs()[j].upper[k]);
+      problem.SetParameterLowerBound(block, k, body.dofs()[j].lower[k]);
+      problem.SetParameterUpperBound(block, k, body.dofs()[j].upper[k]);
+    }
+  }
+  if (!options.fit_pose) {
+    problem.SetParameterBlockConstant(fp->root_t);
+    problem.SetParameterBlockConstant(fp->root_aa);
+  }
+  if (fit_shape) {
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(kShapeBlockSize, kShapeBlockSize);
+    Eigen::VectorXd b(kShapeBlockSize);
+    for (int i = 0; i < kShapeBlockSize; ++i) {
+      A(i, i) = options.shape_prior_weight;
+      b(i) = shape_prior[i];
+    }
+    problem.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, fp->shape);
+    for (int i = 0; i < kShapeBlockSize; ++i) {
+      problem.SetParameterLowerBound(fp->shape, i, 0.6 * shape_prior[i]);
+      problem.SetParameterUpperBound(fp->shape, i, 1.6 * shape_prior[i]);
+    }
+  } else {
+    problem.SetParameterBlockConstant(fp->shape);
+  }
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = options.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.function_tolerance = 1e-5;
+  solver_options.parameter_tolerance = 1e-6;
+  ceres::Solver::Summary solver_summary;
+  ceres::Solve(solver_options, &problem, &solver_summary);
+  if (first) summary->initial_cost = solver_summary.initial_cost;
+  summary->final_cost = solver_summary.final_cost;
+  summary->iterations += static_cast<int>(solver_summary.iterations.size()) - 1;
+  summary->converged = solver_summary.termination_type == ceres::CONVERGENCE;
+}
+
+}  // namespace
+
+SilhouetteFitSummary FitTemplateToSilhouettes(const BodyTemplate& body, const SilhouetteObservations& observations,
+                                              const SilhouetteFitOptions& options, BodyShape* shape,
+                                              TemplatePose* pose, const TemplatePose* prior) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  SilhouetteFitSummary summary;
+  summary.num_cameras = observations.num_used_cameras();
+  if (summary.num_cameras == 0) return summary;
+  const auto& obs = observations.impl();
+  // Shape: one value per group (left and right share), the mean of the group's segments.
+  FitParams fp;
+  double shape_prior[kShapeBlockSize];
+  for (int g = 0; g < ti::kNumShapeGroups; ++g) {
+    double l = 0, gi = 0;
+    int n = 0;
+    for (int s = 0; s < kNumBodySegments; ++s)
+      if (ti::kSegmentGroup[s] == g) {
+        l += shape->length_scale[s];
+        gi += shape->girth_scale[s];
+        ++n;
+      }
+    fp.shape[g] = l / n;
+    fp.shape[ti::kNumShapeGroups + g] = gi / n;
+  }
+  // The shape prior: the mean scale of lengths and of girths (a uniformly scaled body).
+  double mean_l = 0, mean_g = 0;
+  for (int g = 0; g < ti::kNumShapeGroups; ++g) {
+    mean_l += fp.shape[g] / ti::kNumShapeGroups;
+    mean_g += fp.shape[ti::kNumShapeGroups + g] / ti::kNumShapeGroups;
+  }
+  for (int g = 0; g < ti::kNumShapeGroups; ++g) {
+    shape_prior[g] = mean_l;
+    shape_prior[ti::kNumShapeGroups + g] = mean_g;
+  }
+  for (int k = 0; k < 3; ++k) fp.root_t[k] = pose->root_translation[k];
+  fp.root_reference = ti::AngleAxisMatrix(pose->root_rotation.data());
+  body.ClampToLimits(pose);
+  fp.dofs = pose->dofs;
+  FitParams prior_params = fp;
+  if (prior) prior_params.dofs = prior->dofs;
+
+  bool first = true;
+  if (options.coarse_to_fine && options.fit_pose) {
+    SolveStage(body, obs, options, true, false, &fp, prior_params, shape_prior, &summary, first);
+    first = false;
+  }
+  for (int round = 0; round < options.rounds; ++round) {
+    SolveStage(body, obs, options, false, options.fit_shape, &fp, prior_params, shape_prior, &summary, first);
+    first = false;
+    // Fold the root rotation increment into the reference.
+    const Matrix3d R = ti::AngleAxisMatrix(fp.root_aa) * fp.root_reference;
+    fp.root_reference = R;
+    fp.root_aa[0] = fp.root_aa[1] = fp.root_aa[2] = 0.0;
+  }
+  {
+    const Matrix3d R = ti::AngleAxisMatrix(fp.root_aa) * fp.root_reference;
+    const Eigen::AngleAxisd aa(R);
+    pose->root_rotation = aa.angle() * aa.axis();
+  }
+  pose->root_translation = Vector3d(fp.root_t[0], fp.root_t[1], fp.root_t[2]);
+  pose->dofs = fp.dofs;
+  if (options.fit_shape) {
+    double length[kNumBodySegments], girth[kNumBodySegments];
+    ShapeArrays(fp.shape, length, girth);
+    for (int s = 0; s < kNumBodySegments; ++s) {
+      shape->length_scale[s] = length[s];
+      shape->girth_scale[s] = girth[s];
+    }
+  }
+  // Residual statistics at the solution.
+  {
+    fp.root_reference = ti::AngleAxisMatrix(pose->root_rotation.data());
+    const auto segments = SegmentsInWorld(body, fp);
+    double outside = 0, contour = 0;
+    long n_out = 0, n_contour = 0;
+    double length[kNumBodySegments], girth[kNumBodySegments];
+    ShapeArrays(fp.shape, length, girth);
+    std::array<Vector3d, kNumTemplateJoints> rest;
+    ti::RestPositions(body, length, girth, &rest);
+    for (const PreparedView& view : obs.views) {
+      for (int s = 0; s < kNumBodySegments; ++s) {
+        const SegmentWorld& w = segments[s];
+        const int joint = body.segments()[s].joint;
+        for (const SurfaceCoord& sc : body.sample_coords()) {
+          const Vector3d X = w.P + w.R * (w.frame.Point(sc) - rest[joint]);
+          const Eigen::Vector2d px = view.camera.Project(X);
+          double sd;
+          view.interpolator->Evaluate((px.y() + 0.5) / view.scale - 0.5, (px.x() + 0.5) / view.scale - 0.5, &sd);
+          outside += std::max(sd, 0.0);
+          ++n_out;
+        }
+      }
+      const double depth = std::max(0.3, view.camera.PointInCamera(segments[int(BodySegment::kLowerTorso)].a).z());
+      const double px_per_m = 0.5 * (view.camera.K(0, 0) + view.camera.K(1, 1)) / view.scale / depth;
+      for (std::size_t i = 0; i < view.ray_origins.size(); ++i) {
+        double best = 1e18;
+        int best_s = 0;
+        for (int s = 0; s < kNumBodySegments; ++s) {
+          const SegmentWorld& w = segments[s];
+          const double d = RayCapsuleDistance(w.frame, w.a, w.axis, w.e1, w.e2, view.ray_origins[i], view.ray_directions[i]);
+          if (d < best) {
+            best = d;
+            best_s = s;
+          }
+        }
+        const auto& f = segments[best_s].frame;
+        contour += std::abs(best - 1.0) * 0.25 * (f.rax + f.ray + f.rbx + f.rby) * px_per_m;
+        ++n_contour;
+      }
+    }
+    summary.mean_outside_px = n_out ? outside / n_out : 0.0;
+    summary.mean_contour_px = n_contour ? contour / n_contour : 0.0;
+  }
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+}  // namespace confluent

@@ -1,0 +1,81 @@
+#pragma once
+// Fitting the body template's pose (and optionally its shape) to the silhouettes of several
+// calibrated cameras with Ceres (autodiff), after Carranza et al. 2003, in a formulation with
+// distance transforms:
+//  - model -> image: surface samples of every segment, projected, should fall inside the
+//    silhouette (signed distance transform of the mask, bicubic interpolation, Huber loss);
+//  - image -> model: contour pixels of the silhouette should be explained by the model: the
+//    normalised distance from the pixel's back-projected ray to its nearest segment capsule
+//    (nearest segment re-assigned every round, Cauchy loss);
+//  - a weak prior towards the predicted pose; joint limits as parameter bounds;
+//  - coarse to fine: root and torso first, then every joint.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "calib/camera.h"
+#include "core/image.h"
+#include "tracking/body_template.h"
+
+namespace confluent {
+
+// Options of FitTemplateToSilhouettes.
+struct SilhouetteFitOptions {
+  int downscale = 0;               // masks are reduced by this factor before the distance transforms;
+                                   // 0 = automatic (about 256 pixels across)
+  int max_contour_points = 250;    // contour pixels per camera for the image -> model term
+  int rounds = 2;                  // contour re-assignment rounds of the full-body stage
+  int max_iterations = 12;         // Levenberg-Marquardt iterations per round
+  bool coarse_to_fine = true;      // fit root and torso first (one round), then everything
+  bool fit_shape = false;          // also optimise the per-segment length and girth scales
+  bool fit_pose = true;            // optimise the pose (false: only the shape)
+  double model_to_image_loss_px = 2.0;  // Huber scale of the model -> image residuals (reduced px)
+  double image_to_model_loss_px = 3.0;  // Cauchy scale of the image -> model residuals (reduced px)
+  double image_to_model_weight = 1.5;   // relative weight of the image -> model term
+  double prior_weight = 2.0;       // weight (per radian) of the prior towards the initial joint angles
+  double shape_prior_weight = 20.0;     // weight of the prior towards equal (uniform) scales
+  int num_threads = 2;
+  // Throws UsageError for out-of-range values.
+  void Check() const;
+};
+
+// What a fit did.
+struct SilhouetteFitSummary {
+  bool converged = false;
+  int iterations = 0;              // LM iterations over all stages
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  double mean_outside_px = 0.0;    // mean distance of model samples outside the silhouettes (reduced px)
+  double mean_contour_px = 0.0;    // mean image -> model residual (reduced px)
+  int num_cameras = 0;             // cameras used
+  double seconds = 0.0;
+};
+
+// One frame's observations prepared for fitting (distance transforms, contour rays).
+class SilhouetteObservations {
+ public:
+  // Prepares the masks (1-channel 8-bit, 0/255, camera size) of the cameras with
+  // `use_camera[i]` (all when empty); masks of unused cameras may be empty images.
+  SilhouetteObservations(const Rig& rig, const std::vector<Image>& masks, const std::vector<bool>& use_camera,
+                         int downscale, int max_contour_points);
+  ~SilhouetteObservations();
+  SilhouetteObservations(SilhouetteObservations&&) noexcept;
+  SilhouetteObservations& operator=(SilhouetteObservations&&) noexcept;
+
+  int num_used_cameras() const;
+  struct Impl;
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+// Fits `pose` (and `shape` when options.fit_shape) to the observations, starting from the
+// values passed in. `prior` (may be null) is the pose the joint-angle prior pulls towards
+// (usually the prediction). Expected failures are reported in the summary, not thrown.
+SilhouetteFitSummary FitTemplateToSilhouettes(const BodyTemplate& body, const SilhouetteObservations& observations,
+                                              const SilhouetteFitOptions& options, BodyShape* shape,
+                                              TemplatePose* pose, const TemplatePose* prior = nullptr);
+
+}  // namespace confluent

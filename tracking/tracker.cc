@@ -1,0 +1,295 @@
+#include "tracking/tracker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <string_view>
+
+#include <Eigen/Eigenvalues>
+
+#include "calib/rig_check.h"
+#include "core/error.h"
+#include "tracking/overlap.h"
+
+namespace confluent {
+namespace {
+
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+Matrix3d RotationOf(const Vector3d& aa) {
+  const double angle = aa.norm();
+  if (angle < 1e-15) return Matrix3d::Identity();
+  return Eigen::AngleAxisd(angle, aa / angle).toRotationMatrix();
+}
+
+Vector3d RotationVector(const Matrix3d& R) {
+  const Eigen::AngleAxisd aa(R);
+  return aa.angle() * aa.axis();
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+std::size_t HashMask(const Image& mask) {
+  return std::hash<std::string_view>()(std::string_view(reinterpret_cast<const char*>(mask.data.data()), mask.data.size()));
+}
+
+}  // namespace
+
+HullPlacement EstimatePlacementFromHull(const Rig& rig, const std::vector<Image>& masks, const std::vector<bool>& use_camera,
+                                        double voxel_m, double half_size_m) {
+  HullPlacement out;
+  out.voxel_m = voxel_m;
+  const RigCheckReport report = CheckRig(rig);
+  const Vector3d center = report.volume_center;
+  std::vector<int> cams;
+  std::vector<Image> small;
+  const int downscale = 4;
+  for (int c = 0; c < rig.size(); ++c) {
+    if ((!use_camera.empty() && !use_camera[c]) || c >= static_cast<int>(masks.size()) || masks[c].empty()) continue;
+    cams.push_back(c);
+    small.push_back(DownscaleMask(masks[c], downscale));
+  }
+  if (cams.size() < 2) return out;
+  const int n = std::max(2, static_cast<int>(std::ceil(2.0 * half_size_m / voxel_m)));
+  const Vector3d origin = center - Vector3d::Constant(half_size_m) + Vector3d::Constant(0.5 * voxel_m);
+  std::vector<Vector3d> occupied;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const Vector3d p = origin + voxel_m * Vector3d(i, j, k);
+        int seen = 0;
+        bool carved = false;
+        for (std::size_t c = 0; c < cams.size() && !carved; ++c) {
+          const Camera& camera = rig.cameras[cams[c]];
+          Eigen::Vector2d px;
+          if (!camera.ProjectChecked(p, &px)) continue;
+          const Image& m = small[c];
+          const int x = static_cast<int>(std::floor((px.x() + 0.5) * m.width / camera.width));
+          const int y = static_cast<int>(std::floor((px.y() + 0.5) * m.height / camera.height));
+          if (x < 0 || y < 0 || x >= m.width || y >= m.height) continue;
+          ++seen;
+          if (!m.at<std::uint8_t>(x, y)) carved = true;
+        }
+        if (!carved && seen >= 2) occupied.push_back(p);
+      }
+  out.num_voxels = static_cast<int>(occupied.size());
+  if (occupied.empty()) return out;
+  Vector3d mean = Vector3d::Zero();
+  double zmin = 1e9, zmax = -1e9;
+  for (const Vector3d& p : occupied) {
+    mean += p;
+    zmin = std::min(zmin, p.z());
+    zmax = std::max(zmax, p.z());
+  }
+  mean /= occupied.size();
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const Vector3d& p : occupied) {
+    const Eigen::Vector2d d = (p - mean).head<2>();
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  const Eigen::Vector2d major = eig.eigenvectors().col(1);
+  out.ok = true;
+  out.centroid = mean;
+  out.floor_z = zmin - 0.5 * voxel_m;
+  out.height_m = zmax - zmin + voxel_m;
+  out.yaw_rad = std::atan2(major.y(), major.x());
+  return out;
+}
+
+void TrackerOptions::Check() const {
+  fit.Check();
+  if (init_rounds < 1) throw UsageError("tracking: init_rounds must be >= 1");
+  if (!(velocity_damping >= 0 && velocity_damping <= 1.5)) throw UsageError("tracking: velocity_damping must be in [0, 1.5]");
+  if (!(bad_frame_iou >= 0 && bad_frame_iou <= 1)) throw UsageError("tracking: bad_frame_iou must be in [0, 1]");
+  if (!(empty_mask_fraction >= 0 && empty_mask_fraction < 1)) throw UsageError("tracking: empty_mask_fraction must be in [0, 1)");
+  if (iou_downscale < 0) throw UsageError("tracking: iou_downscale must be >= 0");
+}
+
+Tracker::Tracker(const Rig& rig, const std::vector<bool>& excluded, const TrackerOptions& options)
+    : rig_(rig), excluded_(excluded), options_(options) {
+  options_.Check();
+  excluded_.resize(rig_.size(), false);
+}
+
+std::vector<bool> Tracker::UsableCameras(const std::vector<Image>& masks, std::vector<std::string>* flags) const {
+  std::vector<bool> use(rig_.size(), false);
+  std::vector<double> counts(rig_.size(), 0.0);
+  std::vector<double> candidates;
+  for (int c = 0; c < rig_.size(); ++c) {
+    if (excluded_[c] || c >= static_cast<int>(masks.size())) continue;
+    counts[c] = static_cast<double>(CountForeground(masks[c])) / std::max(1, masks[c].width * masks[c].height);
+    candidates.push_back(counts[c]);
+  }
+  const double median = Median(candidates);
+  for (int c = 0; c < rig_.size(); ++c) {
+    if (excluded_[c] || c >= static_cast<int>(masks.size())) continue;
+    if (masks[c].empty() || counts[c] <= options_.empty_mask_fraction * median || counts[c] <= 0.0) {
+      flags->push_back("empty_mask:" + rig_.cameras[c].name);
+      continue;
+    }
+    use[c] = true;
+  }
+  return use;
+}
+
+void Tracker::Evaluate(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result) const {
+  const Mesh mesh = body_.PosedMesh(shape_, result->pose);
+  result->camera_iou.assign(rig_.size(), -1.0);
+  double sum = 0;
+  int n = 0;
+  for (int c = 0; c < rig_.size(); ++c) {
+    if (!use[c]) continue;
+    const int factor = options_.iou_downscale > 0 ? options_.iou_downscale
+                                                  : std::max(1, static_cast<int>(std::lround(masks[c].width / 256.0)));
+    const Image rendered = RasterizeSilhouette(mesh, rig_.cameras[c], factor);
+    const Image mask = DownscaleMask(masks[c], factor);
+    if (mask.width != rendered.width || mask.height != rendered.height) continue;
+    result->camera_iou[c] = MaskIoU(rendered, mask);
+    sum += result->camera_iou[c];
+    ++n;
+  }
+  result->mean_iou = n ? sum / n : 0.0;
+  result->joints = body_.JointPositions(shape_, result->pose);
+}
+
+TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
+  const auto start = std::chrono::steady_clock::now();
+  TrackedFrame result;
+  result.frame = frame;
+  const std::vector<bool> use = UsableCameras(masks, &result.flags);
+  placement_ = EstimatePlacementFromHull(rig_, masks, use);
+  history_.clear();
+  iou_history_.clear();
+  last_mask_hashes_.clear();
+  if (!placement_.ok) {
+    result.flags.push_back("no_hull");
+    initialized_ = false;
+    return result;
+  }
+  shape_ = BodyShape::Uniform(std::clamp(placement_.height_m, 1.0, 2.3));
+  const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);
+  SilhouetteFitOptions hypothesis_options = options_.fit;
+  hypothesis_options.prior_weight = 0.2;
+  hypothesis_options.rounds = 2;
+  hypothesis_options.max_iterations = 20;
+  TrackedFrame best;
+  best.mean_iou = -1.0;
+  for (double yaw_offset : {0.0, M_PI}) {
+    for (double arm_deg : {0.0, 45.0, -30.0}) {
+      TrackedFrame candidate;
+      candidate.frame = frame;
+      TemplatePose& pose = candidate.pose;
+      pose.root_translation = Vector3d(placement_.centroid.x(), placement_.centroid.y(), placement_.floor_z);
+      pose.root_rotation = Vector3d(0, 0, placement_.yaw_rad + yaw_offset);
+      const double arm = arm_deg * M_PI / 180.0;
+      pose.dofs[kTjLeftShoulder] = {0.0, arm, 0.0};
+      pose.dofs[kTjRightShoulder] = {0.0, -arm, 0.0};
+      BodyShape shape = shape_;
+      candidate.fit = FitTemplateToSilhouettes(body_, observations, hypothesis_options, &shape, &pose);
+      Evaluate(masks, use, &candidate);
+      if (candidate.mean_iou > best.mean_iou) best = candidate;
+    }
+  }
+  // Joint shape-and-pose fit from the best hypothesis, then a final pose refinement.
+  SilhouetteFitOptions shape_options = options_.fit;
+  shape_options.fit_shape = true;
+  shape_options.rounds = options_.init_rounds;
+  shape_options.max_iterations = 25;
+  shape_options.prior_weight = 0.2;
+  TemplatePose pose = best.pose;
+  SilhouetteFitSummary summary = FitTemplateToSilhouettes(body_, observations, shape_options, &shape_, &pose);
+  SilhouetteFitOptions refine = options_.fit;
+  refine.prior_weight = 0.2;
+  refine.rounds = 2;
+  refine.coarse_to_fine = false;
+  const SilhouetteFitSummary refined = FitTemplateToSilhouettes(body_, observations, refine, &shape_, &pose);
+  summary.iterations += refined.iterations;
+  summary.final_cost = refined.final_cost;
+  summary.mean_outside_px = refined.mean_outside_px;
+  summary.mean_contour_px = refined.mean_contour_px;
+  result.pose = pose;
+  result.fit = summary;
+  Evaluate(masks, use, &result);
+  result.flags.push_back("initialized");
+  initialized_ = true;
+  history_.push_back(result.pose);
+  iou_history_.push_back(result.mean_iou);
+  for (const Image& m : masks) last_mask_hashes_.push_back(HashMask(m));
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
+  if (!initialized_) return Initialize(frame, masks);
+  const auto start = std::chrono::steady_clock::now();
+  TrackedFrame result;
+  result.frame = frame;
+  const std::vector<bool> use = UsableCameras(masks, &result.flags);
+  // A repeated frame (identical masks): keep the pose, do not disturb the velocity.
+  std::vector<std::size_t> hashes;
+  for (const Image& m : masks) hashes.push_back(HashMask(m));
+  if (hashes == last_mask_hashes_) {
+    result.pose = history_.back();
+    result.flags.push_back("duplicate");
+    Evaluate(masks, use, &result);
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+  }
+  last_mask_hashes_ = hashes;
+  // Constant-velocity prediction.
+  const TemplatePose& last = history_.back();
+  TemplatePose predicted = last;
+  if (history_.size() >= 2) {
+    const TemplatePose& before = history_[history_.size() - 2];
+    const double k = options_.velocity_damping;
+    predicted.root_translation = last.root_translation + k * (last.root_translation - before.root_translation);
+    const Matrix3d R1 = RotationOf(last.root_rotation), R0 = RotationOf(before.root_rotation);
+    predicted.root_rotation = RotationVector(RotationOf(k * RotationVector(R1 * R0.transpose())) * R1);
+    for (int j = 0; j < kNumTemplateJoints; ++j)
+      for (int d = 0; d < 3; ++d) predicted.dofs[j][d] = last.dofs[j][d] + k * (last.dofs[j][d] - before.dofs[j][d]);
+    body_.ClampToLimits(&predicted);
+  }
+  const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);
+  result.pose = predicted;
+  result.fit = FitTemplateToSilhouettes(body_, observations, options_.fit, &shape_, &result.pose, &predicted);
+  Evaluate(masks, use, &result);
+  // Bad-frame detection and recovery: re-fit from the neighbouring accepted poses.
+  std::vector<double> recent(iou_history_.end() - std::min<std::size_t>(iou_history_.size(), 10), iou_history_.end());
+  const double reference = Median(recent);
+  const bool bad = result.mean_iou < options_.bad_frame_iou || result.mean_iou < reference - options_.bad_frame_iou_drop;
+  if (bad) {
+    SilhouetteFitOptions recover = options_.fit;
+    recover.rounds = options_.fit.rounds + 1;
+    recover.max_iterations = 2 * options_.fit.max_iterations;
+    recover.prior_weight = 0.5 * options_.fit.prior_weight;
+    const double before_iou = result.mean_iou;
+    for (std::size_t back = 1; back <= std::min<std::size_t>(2, history_.size()); ++back) {
+      TrackedFrame candidate;
+      candidate.frame = frame;
+      candidate.pose = history_[history_.size() - back];
+      const TemplatePose start_pose = candidate.pose;
+      candidate.fit = FitTemplateToSilhouettes(body_, observations, recover, &shape_, &candidate.pose, &start_pose);
+      Evaluate(masks, use, &candidate);
+      if (candidate.mean_iou > result.mean_iou) {
+        candidate.flags = result.flags;
+        result = candidate;
+      }
+    }
+    result.flags.push_back(result.mean_iou > before_iou ? "recovered" : "bad");
+    if (result.mean_iou < options_.bad_frame_iou) result.flags.push_back("low_overlap");
+  }
+  history_.push_back(result.pose);
+  if (history_.size() > 4) history_.erase(history_.begin());
+  iou_history_.push_back(result.mean_iou);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace confluent

@@ -1,0 +1,91 @@
+#pragma once
+// Marker-less motion capture: automatic initialisation of the body template from the visual
+// hull and a joint shape-and-pose fit, then frame-by-frame silhouette tracking with constant
+// velocity prediction, bad-frame detection and recovery (after Carranza et al. 2003).
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "calib/camera.h"
+#include "core/image.h"
+#include "tracking/body_template.h"
+#include "tracking/silhouette_fit.h"
+
+namespace confluent {
+
+// Global placement of a person from the visual hull of the masks.
+struct HullPlacement {
+  bool ok = false;                 // false when no voxel survived carving
+  int num_voxels = 0;
+  double voxel_m = 0.0;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  // world, m
+  double floor_z = 0.0;            // lowest voxel (bottom face), m
+  double height_m = 0.0;           // highest minus lowest voxel face, m
+  double yaw_rad = 0.0;            // rotation about +z taking the template's lateral (x) axis to the hull's major horizontal axis
+};
+
+// Carves a voxel hull (cube of `half_size_m` around the rig's convergence point, cells of
+// `voxel_m`) from the masks of the cameras with use_camera[i] (all when empty) and measures it.
+HullPlacement EstimatePlacementFromHull(const Rig& rig, const std::vector<Image>& masks, const std::vector<bool>& use_camera,
+                                        double voxel_m = 0.03, double half_size_m = 1.6);
+
+// Options of the Tracker.
+struct TrackerOptions {
+  SilhouetteFitOptions fit;        // per-frame fit
+  int init_rounds = 3;             // contour rounds of the initial shape-and-pose fit
+  double velocity_damping = 0.7;   // fraction of the last frame's velocity used for the prediction
+  double bad_frame_iou = 0.7;      // mean IoU below this triggers a recovery
+  double bad_frame_iou_drop = 0.1; // ... or a drop of this much below the running median
+  double empty_mask_fraction = 0.2;  // a camera with less foreground than this fraction of the median camera is skipped
+  int iou_downscale = 0;           // resolution reduction of the per-frame IoU check (0 = automatic)
+  // Throws UsageError for out-of-range values.
+  void Check() const;
+};
+
+// Result of one frame.
+struct TrackedFrame {
+  int frame = 0;
+  TemplatePose pose;
+  std::vector<Eigen::Vector3d> joints;   // world joint positions (template joint order), m
+  std::vector<double> camera_iou;        // per rig camera; -1 for cameras not used
+  double mean_iou = 0.0;                 // over the used cameras
+  SilhouetteFitSummary fit;
+  std::vector<std::string> flags;        // "duplicate", "empty_mask:<cam>", "recovered", "bad" ...
+  double seconds = 0.0;
+};
+
+// Frame-by-frame tracker; holds the shape and the pose history.
+class Tracker {
+ public:
+  // `excluded[i]` marks rig cameras never used (held out); may be empty.
+  Tracker(const Rig& rig, const std::vector<bool>& excluded, const TrackerOptions& options = {});
+
+  // Automatic initialisation from one frame's masks (placement from the visual hull, then a
+  // joint shape-and-pose fit over several hypotheses of heading and arm pose). Resets history.
+  TrackedFrame Initialize(int frame, const std::vector<Image>& masks);
+  // Tracks the next frame (Initialize first). Masks: one per rig camera (0/255).
+  TrackedFrame Track(int frame, const std::vector<Image>& masks);
+
+  bool initialized() const { return initialized_; }
+  const BodyTemplate& body() const { return body_; }
+  const BodyShape& shape() const { return shape_; }
+  const HullPlacement& placement() const { return placement_; }
+
+ private:
+  std::vector<bool> UsableCameras(const std::vector<Image>& masks, std::vector<std::string>* flags) const;
+  void Evaluate(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result) const;
+
+  Rig rig_;
+  std::vector<bool> excluded_;
+  TrackerOptions options_;
+  BodyTemplate body_;
+  BodyShape shape_;
+  HullPlacement placement_;
+  bool initialized_ = false;
+  std::vector<TemplatePose> history_;     // accepted poses, most recent last
+  std::vector<double> iou_history_;
+  std::vector<std::size_t> last_mask_hashes_;
+};
+
+}  // namespace confluent
