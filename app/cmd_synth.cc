@@ -6,29 +6,13 @@
 
 #include "app/commands.h"
 #include "core/error.h"
-#include "render/studio_synth.h"
+#include "render/studio_presets.h"
 
 namespace confluent::app {
 namespace {
 
 int RunSynth(const ParsedArgs& args, const Context& context) {
-  StudioSynthOptions options;
-  const std::string preset = args.get("preset", "default");
-  if (preset == "tiny") {
-    // A few-second fixture for tests: 4 + 2 cameras, 160 x 120, 10 frames over the whole
-    // performance, about 16K triangles.
-    options.rig.num_ring_cameras = 4;
-    options.rig.num_heldout_cameras = 2;
-    options.rig.width_px = 160;
-    options.rig.height_px = 120;
-    options.motion.num_frames = 10;
-    options.motion.fps = 2.5;
-    options.actor.target_triangles = 16000;
-    options.scene.floor_texture_px = 512;
-    options.threads = 1;
-  } else if (preset != "default") {
-    throw UsageError("--preset: expected default or tiny, got '" + preset + "'");
-  }
+  StudioSynthOptions options = StudioSynthPreset(args.get("preset", "default"));
   options.capture_dir = args.get("out");
   options.ground_truth_dir = args.get("gt");
   options.motion.num_frames = args.get_int("frames", options.motion.num_frames);

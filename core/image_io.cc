@@ -64,7 +64,7 @@ void WriteImage(const std::string& path, const Image& image) {
     if (!output) throw OutputError(path, "unsupported image format: " + OIIO::geterror());
     OIIO::ImageSpec spec(image.width, image.height, image.channels, OiioType(image.type));
     const std::string extension = std::filesystem::path(path).extension().string();
-    if (extension == ".png" || extension == ".PNG") spec.attribute("png:compressionLevel", 3);
+    if (extension == ".png" || extension == ".PNG") spec.attribute("png:compressionLevel", 1);  // fast: frames are written by the thousand
     if (extension == ".jpg" || extension == ".jpeg") spec.attribute("CompressionQuality", 95);
     if (!output->open(temporary, spec)) throw OutputError(path, "cannot open for writing: " + output->geterror());
     if (!output->write_image(OiioType(image.type), image.data.data()))
