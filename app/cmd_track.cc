@@ -197,9 +197,9 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
     std::string flags;
     for (const std::string& f : result.flags) flags += (flags.empty() ? "" : ",") + f;
     char line[512];
-    std::snprintf(line, sizeof line, "frame %06d  iou %.3f  heldout %s  outside %.2fpx  contour %.2fpx  iters %3d  %.2fs%s%s%s",
+    std::snprintf(line, sizeof line, "frame %06d  iou %.3f  heldout %s  outside %.2fpx  contour %.2fpx  iters %3d  %.2fs (cpu %.2fs)%s%s%s",
                   frame, result.mean_iou, heldout_n ? std::to_string(heldout_sum / heldout_n).substr(0, 5).c_str() : "  -  ",
-                  result.fit.mean_outside_px, result.fit.mean_contour_px, result.fit.iterations, result.seconds,
+                  result.fit.mean_outside_px, result.fit.mean_contour_px, result.fit.iterations, result.seconds, result.cpu_seconds,
                   frame_joint_error >= 0 ? ("  joints " + std::to_string(frame_joint_error * 100).substr(0, 5) + "cm").c_str() : "",
                   flags.empty() ? "" : "  ", flags.c_str());
     report_lines.push_back(line);
@@ -211,9 +211,13 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
   WritePosesJson((fs::path(out_dir) / "poses.json").string(), body, tracker.shape(), rig.names(), results, fps);
   WriteBvh((fs::path(out_dir) / "motion.bvh").string(), body.MakeSkeleton(tracker.shape()), poses, 1.0 / fps);
   WriteTextFile((fs::path(out_dir) / "overlap.csv").string(), overlap_csv);
-  std::string timings = "frame,seconds,iterations\n";
-  for (const TrackedFrame& r : results)
-    timings += std::to_string(r.frame) + "," + std::to_string(r.seconds) + "," + std::to_string(r.fit.iterations) + "\n";
+  std::string timings = "frame,seconds,cpu_seconds,fit_seconds,iterations\n";
+  std::vector<double> tracked_cpu;
+  for (const TrackedFrame& r : results) {
+    timings += std::to_string(r.frame) + "," + std::to_string(r.seconds) + "," + std::to_string(r.cpu_seconds) + "," +
+               std::to_string(r.fit.seconds) + "," + std::to_string(r.fit.iterations) + "\n";
+    if (&r != &results.front()) tracked_cpu.push_back(r.cpu_seconds);
+  }
   WriteTextFile((fs::path(out_dir) / "timings.csv").string(), timings);
 
   for (const std::string& line : report_lines) std::printf("%s\n", line.c_str());
@@ -233,10 +237,12 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
   summary["mean_iou_tracked_cameras"] = iou_sum / std::max<std::size_t>(1, results.size());
   summary["init_seconds"] = frame_seconds.empty() ? 0.0 : frame_seconds.front();
   summary["median_track_seconds"] = Percentile(tracked_seconds, 0.5);
+  summary["median_track_cpu_seconds"] = Percentile(tracked_cpu, 0.5);
   summary["flagged_frames"] = flagged;
-  std::printf("tracked %zu frames: mean IoU %.3f (tracked cameras), init %.2fs, median %.3fs per frame, %d flagged\n",
+  std::printf("tracked %zu frames: mean IoU %.3f (tracked cameras), init %.2fs, median %.3fs per frame (cpu %.3fs), %d flagged\n",
               results.size(), iou_sum / std::max<std::size_t>(1, results.size()),
-              frame_seconds.empty() ? 0.0 : frame_seconds.front(), Percentile(tracked_seconds, 0.5), flagged);
+              frame_seconds.empty() ? 0.0 : frame_seconds.front(), Percentile(tracked_seconds, 0.5),
+              Percentile(tracked_cpu, 0.5), flagged);
   if (!heldout_ious.empty()) {
     const double mean = std::accumulate(heldout_ious.begin(), heldout_ious.end(), 0.0) / heldout_ious.size();
     summary["heldout_iou_mean"] = mean;

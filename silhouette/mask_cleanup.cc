@@ -135,16 +135,20 @@ Image CleanMask(const Image& raw, const MaskCleanupOptions& options, MaskCleanup
   const cv::Mat cross = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
   cv::erode(kept, core, cross, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
   cv::dilate(kept, band, cross);
-  if (scale != 1) {
-    cv::resize(core, core, full.size(), 0, 0, cv::INTER_NEAREST);
-    cv::resize(band, band, full.size(), 0, 0, cv::INTER_NEAREST);
+  // Upsampling by lookup: full-resolution pixel (x, y) reads work pixel (x / scale, y / scale).
+  std::vector<int> column(raw.width);
+  for (int x = 0; x < raw.width; ++x) column[x] = x / scale;
+  for (int y = 0; y < raw.height; ++y) {
+    const std::uint8_t* core_row = core.ptr<std::uint8_t>(y / scale);
+    const std::uint8_t* band_row = band.ptr<std::uint8_t>(y / scale);
+    const std::uint8_t* raw_row = raw.data.data() + static_cast<std::size_t>(y) * raw.width;
+    std::uint8_t* out = result.data.data() + static_cast<std::size_t>(y) * raw.width;
+    if (scale == 1) {
+      for (int x = 0; x < raw.width; ++x) out[x] = core_row[x] | (raw_row[x] & band_row[x]);
+    } else {
+      for (int x = 0; x < raw.width; ++x) out[x] = core_row[column[x]] | (raw_row[x] & band_row[column[x]]);
+    }
   }
-  const std::size_t pixels = static_cast<std::size_t>(raw.width) * raw.height;
-  const std::uint8_t* __restrict core_p = core.ptr<std::uint8_t>();
-  const std::uint8_t* __restrict band_p = band.ptr<std::uint8_t>();
-  const std::uint8_t* __restrict raw_p = raw.data.data();
-  std::uint8_t* __restrict out = result.data.data();
-  for (std::size_t i = 0; i < pixels; ++i) out[i] = core_p[i] | (raw_p[i] & band_p[i]);
   return result;
 }
 

@@ -270,7 +270,7 @@ void BodyTemplate::ClampToLimits(TemplatePose* pose) const {
 std::string JointMappingNote() {
   return "template joints carry the studio skeleton's names (pelvis, spine, chest, neck, head, head_end, "
          "{left,right}_{shoulder,elbow,wrist,hand_end,hip,knee,ankle,toe}); each template joint is compared with "
-         "the studio joint of the same name. The joint-error metric uses the 16 articulation joints (pelvis, spine, "
+         "the studio joint of the same name. The joint-error metric uses the 17 articulation joints (pelvis, spine, "
          "chest, neck, head, shoulders, elbows, wrists, hips, knees, ankles), excluding the end sites "
          "(head_end, hand_end, toe), whose position is a convention of each model.";
 }

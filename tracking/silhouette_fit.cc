@@ -118,6 +118,35 @@ struct SegmentCost {
   std::vector<SurfaceCoord> samples;       // model -> image
   std::vector<int> rays;                   // image -> model: indices into view rays
   double ray_weight = 1.0;                 // reduced px per metre at the body, times the term weight
+  // Fast path when the shape is constant: rest joints, the samples relative to the segment's
+  // joint, and the capsule, all precomputed in double.
+  bool shape_constant = false;
+  std::array<Vector3d, kNumTemplateJoints> rest_fixed;
+  std::vector<Vector3d> local_samples;
+  ti::SegmentFrame<double> frame_fixed;
+
+  // Camera projection (with distortion when the camera has any) of a camera-frame point to
+  // reduced pixels, then the signed distance residual.
+  template <typename T>
+  T SilhouetteResidual(const ti::Vec3<T>& Xc) const {
+    const Camera& cam = view->camera;
+    if (Xc.z() < T(1e-3)) return T(0.0);
+    const T x = Xc.x() / Xc.z(), y = Xc.y() / Xc.z();
+    T xd = x, yd = y;
+    if (cam.has_distortion()) {
+      const double k1 = cam.dist(0), k2 = cam.dist(1), p1 = cam.dist(2), p2 = cam.dist(3), k3 = cam.dist(4);
+      const T r2 = x * x + y * y;
+      const T radial = T(1.0) + r2 * (T(k1) + r2 * (T(k2) + r2 * T(k3)));
+      xd = x * radial + T(2.0 * p1) * x * y + T(p2) * (r2 + T(2.0) * x * x);
+      yd = y * radial + T(p1) * (r2 + T(2.0) * y * y) + T(2.0 * p2) * x * y;
+    }
+    const double inv_scale = 1.0 / view->scale;
+    const T us = (T(cam.K(0, 0)) * xd + T(cam.K(0, 1)) * yd + T(cam.K(0, 2)) + T(0.5)) * T(inv_scale) - T(0.5);
+    const T vs = (T(cam.K(1, 1)) * yd + T(cam.K(1, 2)) + T(0.5)) * T(inv_scale) - T(0.5);
+    T sd;
+    view->interpolator->Evaluate(vs, us, &sd);
+    return sd > T(-0.5) ? sd + T(0.5) : T(0.0);
+  }
 
   template <typename T>
   bool operator()(T const* const* p, T* residuals) const {
@@ -125,53 +154,59 @@ struct SegmentCost {
     const T* root_aa = p[1];
     const T* jp[kNumTemplateJoints] = {};
     for (std::size_t i = 0; i < chain_joints.size(); ++i) jp[chain_joints[i]] = p[2 + i];
-    const T* shape = p[2 + chain_joints.size()];
-    T length[kNumBodySegments], girth[kNumBodySegments];
-    for (int s = 0; s < kNumBodySegments; ++s) {
-      length[s] = shape[ti::kSegmentGroup[s]];
-      girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
-    }
-    std::array<ti::Vec3<T>, kNumTemplateJoints> rest;
-    ti::RestPositions(*body, length, girth, &rest);
     const int joint = body->segments()[segment].joint;
+    std::array<ti::Vec3<T>, kNumTemplateJoints> rest;
+    ti::SegmentFrame<T> frame;
+    if (shape_constant) {
+      for (int j = 0; j < kNumTemplateJoints; ++j) rest[j] = rest_fixed[j].cast<T>();
+      frame.a = frame_fixed.a.cast<T>();
+      frame.axis = frame_fixed.axis.cast<T>();
+      frame.e1 = frame_fixed.e1.cast<T>();
+      frame.e2 = frame_fixed.e2.cast<T>();
+      frame.length = T(frame_fixed.length);
+      frame.rax = T(frame_fixed.rax);
+      frame.ray = T(frame_fixed.ray);
+      frame.rbx = T(frame_fixed.rbx);
+      frame.rby = T(frame_fixed.rby);
+      frame.cap_a = T(frame_fixed.cap_a);
+      frame.cap_b = T(frame_fixed.cap_b);
+    } else {
+      const T* shape = p[2 + chain_joints.size()];
+      T length[kNumBodySegments], girth[kNumBodySegments];
+      for (int s = 0; s < kNumBodySegments; ++s) {
+        length[s] = shape[ti::kSegmentGroup[s]];
+        girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
+      }
+      ti::RestPositions(*body, length, girth, &rest);
+      frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth);
+    }
     ti::Mat3<T> R;
     ti::Vec3<T> P;
     ti::JointWorldTransform(*body, joint, rest, root_t, root_aa, root_reference, jp, &R, &P);
-    const ti::SegmentFrame<T> frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth);
     const Camera& cam = view->camera;
-    const Matrix3d& Rc = cam.rotation;
-    const Vector3d& tc = cam.translation;
-    const double k1 = cam.dist(0), k2 = cam.dist(1), p1 = cam.dist(2), p2 = cam.dist(3), k3 = cam.dist(4);
-    const double inv_scale = 1.0 / view->scale;
+    // camera_from_segment: Xc = M * (X_rest - rest[joint]) + c.
+    const ti::Mat3<T> M = cam.rotation.cast<T>() * R;
+    const ti::Vec3<T> c = cam.rotation.cast<T>() * P + cam.translation.cast<T>();
     int r = 0;
-    for (const SurfaceCoord& sc : samples) {
-      const ti::Vec3<T> X = P + R * (frame.Point(sc) - rest[joint]);
-      const ti::Vec3<T> Xc = Rc.cast<T>() * X + tc.cast<T>();
-      if (Xc.z() < T(1e-3)) {
-        residuals[r++] = T(0.0);
-        continue;
+    if (shape_constant) {
+      for (const Vector3d& local : local_samples) {
+        const ti::Vec3<T> Xc = M * local + c;
+        residuals[r++] = SilhouetteResidual(Xc);
       }
-      const T x = Xc.x() / Xc.z(), y = Xc.y() / Xc.z();
-      const T r2 = x * x + y * y;
-      const T radial = T(1.0) + r2 * (T(k1) + r2 * (T(k2) + r2 * T(k3)));
-      const T xd = x * radial + T(2.0 * p1) * x * y + T(p2) * (r2 + T(2.0) * x * x);
-      const T yd = y * radial + T(p1) * (r2 + T(2.0) * y * y) + T(2.0 * p2) * x * y;
-      const T u = T(cam.K(0, 0)) * xd + T(cam.K(0, 1)) * yd + T(cam.K(0, 2));
-      const T v = T(cam.K(1, 1)) * yd + T(cam.K(1, 2));
-      const T us = (u + T(0.5)) * T(inv_scale) - T(0.5);
-      const T vs = (v + T(0.5)) * T(inv_scale) - T(0.5);
-      T sd;
-      view->interpolator->Evaluate(vs, us, &sd);
-      residuals[r++] = sd > T(-0.5) ? sd + T(0.5) : T(0.0);
+    } else {
+      for (const SurfaceCoord& sc : samples) {
+        const ti::Vec3<T> Xc = M * (frame.Point(sc) - rest[joint]) + c;
+        residuals[r++] = SilhouetteResidual(Xc);
+      }
     }
     if (!rays.empty()) {
       const ti::Vec3<T> a = P + R * (frame.a - rest[joint]);
       const ti::Vec3<T> axis = R * frame.axis, e1 = R * frame.e1, e2 = R * frame.e2;
       for (int index : rays) {
         const ti::Vec3<T> o = view->ray_origins[index].cast<T>() - a;
-        const ti::Vec3<T> d = view->ray_directions[index].cast<T>();
+        const Vector3d& d = view->ray_directions[index];
         const T oz = o.dot(axis), ox = o.dot(e1), oy = o.dot(e2);
-        const T dz = d.dot(axis), dx = d.dot(e1), dy = d.dot(e2);
+        const T dz = axis.dot(d.cast<T>()), dx = e1.dot(d.cast<T>()), dy = e2.dot(d.cast<T>());
         const T d_o = dx * ox + dy * oy + dz * oz;
         const T denom = T(1.0) - dz * dz;
         T s = denom > T(1e-6) ? (oz - dz * d_o) / denom : oz;
@@ -285,6 +320,12 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
     chains[s] = chain;
   }
   const Vector3d body_center = segments[int(BodySegment::kLowerTorso)].a;
+  std::array<Vector3d, kNumTemplateJoints> fixed_rest;
+  {
+    double length[kNumBodySegments], girth[kNumBodySegments];
+    ShapeArrays(fp->shape, length, girth);
+    ti::RestPositions(body, length, girth, &fixed_rest);
+  }
   for (const PreparedView& view : obs.views) {
     // Image -> model: assign each contour ray to its nearest segment.
     std::array<std::vector<int>, kNumBodySegments> assigned;
@@ -313,11 +354,25 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
         functor->segment = s;
         functor->root_reference = fp->root_reference;
         functor->chain_joints = chains[s];
-        if (kind == 0)
-          functor->samples = body.sample_coords();
-        else
+        if (kind == 0) {
+          // Small segments (head, neck, hands, feet) get every other sample.
+          const bool small = s == int(BodySegment::kHead) || s == int(BodySegment::kNeck) ||
+                             s == int(BodySegment::kLeftHand) || s == int(BodySegment::kRightHand) ||
+                             s == int(BodySegment::kLeftFoot) || s == int(BodySegment::kRightFoot);
+          const auto& all = body.sample_coords();
+          for (std::size_t i = 0; i < all.size(); i += small ? 2 : 1) functor->samples.push_back(all[i]);
+        } else
           functor->rays = assigned[s];
         functor->ray_weight = px_per_m * options.image_to_model_weight;
+        if (!fit_shape) {
+          functor->shape_constant = true;
+          functor->rest_fixed = fixed_rest;
+          functor->frame_fixed = segments[s].frame;
+          const int joint = body.segments()[s].joint;
+          if (kind == 0)
+            for (const SurfaceCoord& sc : functor->samples)
+              functor->local_samples.push_back(segments[s].frame.Point(sc) - fixed_rest[joint]);
+        }
         const int num_residuals = kind == 0 ? static_cast<int>(functor->samples.size()) : static_cast<int>(functor->rays.size());
         auto* cost = new ceres::DynamicAutoDiffCostFunction<SegmentCost, 18>(functor);
         std::vector<double*> blocks = {fp->root_t, fp->root_aa};
@@ -378,7 +433,7 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
   }
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.max_num_iterations = coarse ? std::max(1, options.max_iterations / 2) : options.max_iterations;
   solver_options.num_threads = options.num_threads;
   solver_options.logging_type = ceres::SILENT;
   solver_options.function_tolerance = 1e-5;

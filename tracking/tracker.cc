@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <functional>
 #include <string_view>
@@ -161,6 +162,7 @@ void Tracker::Evaluate(const std::vector<Image>& masks, const std::vector<bool>&
 
 TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   const auto start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
   TrackedFrame result;
   result.frame = frame;
   const std::vector<bool> use = UsableCameras(masks, &result.flags);
@@ -223,12 +225,14 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   iou_history_.push_back(result.mean_iou);
   for (const Image& m : masks) last_mask_hashes_.push_back(HashMask(m));
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   return result;
 }
 
 TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   if (!initialized_) return Initialize(frame, masks);
   const auto start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
   TrackedFrame result;
   result.frame = frame;
   const std::vector<bool> use = UsableCameras(masks, &result.flags);
@@ -240,6 +244,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
     result.flags.push_back("duplicate");
     Evaluate(masks, use, &result);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     return result;
   }
   last_mask_hashes_ = hashes;
@@ -289,6 +294,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   if (history_.size() > 4) history_.erase(history_.begin());
   iou_history_.push_back(result.mean_iou);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   return result;
 }
 

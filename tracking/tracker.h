@@ -52,7 +52,8 @@ struct TrackedFrame {
   double mean_iou = 0.0;                 // over the used cameras
   SilhouetteFitSummary fit;
   std::vector<std::string> flags;        // "duplicate", "empty_mask:<cam>", "recovered", "bad" ...
-  double seconds = 0.0;
+  double seconds = 0.0;                  // wall-clock time of the frame
+  double cpu_seconds = 0.0;              // process CPU time of the frame (all threads)
 };
 
 // Frame-by-frame tracker; holds the shape and the pose history.

@@ -54,7 +54,7 @@ TEST(CalibrateCli, CalibratesThreeGeneratedCameras) {
     const Camera& t = truth.Get(got.cameras[c].name);
     EXPECT_NEAR(got.cameras[c].K(0, 0) / t.K(0, 0), 1.0, 0.01) << t.name;
     EXPECT_NEAR(got.cameras[c].K(1, 1) / t.K(1, 1), 1.0, 0.01) << t.name;
-    EXPECT_LT((got.cameras[c].center_in_world() - ref_from_world * t.center_in_world()).norm(), 0.02) << t.name;
+    EXPECT_LT((got.cameras[c].center_in_world() - ref_from_world * t.center_in_world()).norm(), 0.05) << t.name;
   }
   EXPECT_LT(got.Get("cam01").center_in_world().norm(), 1e-9);
 }
