@@ -22,7 +22,10 @@ OIIO::TypeDesc OiioType(PixelType type) {
 std::unique_ptr<OIIO::ImageInput> OpenInput(const std::string& path) {
   std::error_code error;
   if (!std::filesystem::exists(path, error)) throw InputError(path, "no such file");
-  auto input = OIIO::ImageInput::open(path);
+  // Keep alpha as stored (no premultiplication), so RGBA files round-trip exactly.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto input = OIIO::ImageInput::open(path, &config);
   if (!input) {
     std::string message = OIIO::geterror();
     throw InputError(path, "cannot read image" + (message.empty() ? std::string() : ": " + message));
@@ -63,6 +66,7 @@ void WriteImage(const std::string& path, const Image& image) {
     auto output = OIIO::ImageOutput::create(path);  // format from the real extension
     if (!output) throw OutputError(path, "unsupported image format: " + OIIO::geterror());
     OIIO::ImageSpec spec(image.width, image.height, image.channels, OiioType(image.type));
+    spec.attribute("oiio:UnassociatedAlpha", 1);  // our alpha is straight, not premultiplied
     const std::string extension = std::filesystem::path(path).extension().string();
     if (extension == ".png" || extension == ".PNG") spec.attribute("png:compressionLevel", 1);  // fast: frames are written by the thousand
     if (extension == ".jpg" || extension == ".jpeg") spec.attribute("CompressionQuality", 95);
