@@ -23,7 +23,7 @@ int RunDemo(const ParsedArgs& args, const Context& context) {
   // 1. The embedded default capture, synthesised once (a finished capture has its synth.json).
   if (!fs::exists(truth_dir / "synth.json")) {
     std::printf("[1/3] synthesising the default capture (%s preset) into %s\n", preset.c_str(), capture_dir.c_str());
-    StudioSynthOptions options = StudioSynthPreset(preset);
+    StudioSynthOptions options = StudioSynthPreset(preset, "--preset");
     options.capture_dir = capture_dir.string();
     options.ground_truth_dir = truth_dir.string();
     const StudioSynthSummary summary = SynthesizeCapture(options, context.make_progress());

@@ -12,7 +12,7 @@ namespace confluent::app {
 namespace {
 
 int RunSynth(const ParsedArgs& args, const Context& context) {
-  StudioSynthOptions options = StudioSynthPreset(args.get("preset", "default"));
+  StudioSynthOptions options = StudioSynthPreset(args.get("preset", "default"), "--preset");
   options.capture_dir = args.get("out");
   options.ground_truth_dir = args.get("gt");
   options.motion.num_frames = args.get_int("frames", options.motion.num_frames);

@@ -140,12 +140,13 @@ Grid MakeGrid(const Eigen::Vector3d& lower, const Eigen::Vector3d& upper, int re
   return grid;
 }
 
-// True when `mask` rejects the point (it projects inside the image onto background).
+// True when `mask` rejects the point: it projects onto background, or outside the camera's
+// view (the hull lies inside every source camera's field of view).
 bool Rejects(const Camera& camera, const Image& mask, const Eigen::Vector3d& point) {
   Eigen::Vector2d pixel;
-  if (!camera.ProjectChecked(point, &pixel)) return false;
+  if (!camera.ProjectChecked(point, &pixel)) return true;
   const int x = static_cast<int>(std::lround(pixel.x())), y = static_cast<int>(std::lround(pixel.y()));
-  if (x < 0 || y < 0 || x >= mask.width || y >= mask.height) return false;
+  if (x < 0 || y < 0 || x >= mask.width || y >= mask.height) return true;
   return mask.data[static_cast<std::size_t>(y) * mask.width + x] == 0;
 }
 
@@ -241,7 +242,8 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
           Eigen::Vector2d pixel;
           if (!camera.ProjectChecked(p, &pixel)) continue;
           const double radius = 0.6 * focal * grid.voxel_m / camera.PointInCamera(p).z();
-          cv::circle(canvas, cv::Point2d(pixel.x(), pixel.y()), std::max(0, static_cast<int>(std::lround(radius))),
+          cv::circle(canvas, cv::Point(static_cast<int>(std::lround(pixel.x())), static_cast<int>(std::lround(pixel.y()))),
+                     std::max(0, static_cast<int>(std::ceil(radius - 0.5))),
                      cv::Scalar(255), cv::FILLED);
         }
     ious.push_back(MaskIoU(hull, masks[t]));

@@ -47,6 +47,9 @@ Image ReadImage(const std::string& path) {
   const bool ok = input->read_image(0, 0, 0, spec.nchannels, OiioType(type), image.data.data());
   std::string message = input->geterror();
   input->close();
+  // Retrieve what close() and the global queue add too: unretrieved errors are printed later.
+  input->geterror();
+  OIIO::geterror();
   // OIIO reports truncated PNG/JPEG data through geterror() even when read_image succeeds.
   if (!ok || !message.empty()) throw InputError(path, "corrupt or truncated image" + (message.empty() ? "" : ": " + message));
   return image;

@@ -4,7 +4,7 @@
 
 namespace confluent {
 
-StudioSynthOptions StudioSynthPreset(const std::string& name) {
+StudioSynthOptions StudioSynthPreset(const std::string& name, const std::string& flag) {
   StudioSynthOptions options;
   if (name == "tiny") {
     options.rig.num_ring_cameras = 4;
@@ -17,7 +17,7 @@ StudioSynthOptions StudioSynthPreset(const std::string& name) {
     options.scene.floor_texture_px = 512;
     options.threads = 1;
   } else if (name != "default") {
-    throw UsageError("unknown studio preset '" + name + "' (expected default or tiny)");
+    throw UsageError(flag + ": unknown studio preset '" + name + "' (expected default or tiny)");
   }
   return options;
 }

@@ -10,7 +10,7 @@ namespace confluent {
 // "default": the embedded default capture (8 ring + 2 held-out cameras, 1024x768, the built-in
 // performance, ~120K-triangle actor). "tiny": a few-second test fixture (4 + 2 cameras,
 // 160x120, 10 frames over the whole performance, ~12K triangles).
-// Throws UsageError naming the accepted presets.
-StudioSynthOptions StudioSynthPreset(const std::string& name);
+// Throws UsageError naming the accepted presets; `flag` (e.g. "--preset") prefixes the message.
+StudioSynthOptions StudioSynthPreset(const std::string& name, const std::string& flag = "preset");
 
 }  // namespace confluent

@@ -118,9 +118,10 @@ TEST(BodyTemplate, ShapeScalesLengthsAndGirths) {
   EXPECT_NEAR((rest1[kTjLeftWrist] - rest1[kTjLeftElbow]).norm(), (rest0[kTjLeftWrist] - rest0[kTjLeftElbow]).norm(), 1e-12);
   BodyShape thick;
   thick.girth_scale[int(BodySegment::kHead)] = 1.5;
+  thick.length_scale[int(BodySegment::kHead)] = 1.5;
   const double v0 = SignedVolume(SegmentMesh(body.PosedMesh(BodyShape(), TemplatePose()), int(BodySegment::kHead)));
   const double v1 = SignedVolume(SegmentMesh(body.PosedMesh(thick, TemplatePose()), int(BodySegment::kHead)));
-  EXPECT_NEAR(v1 / v0, 1.5 * 1.5 * 1.5, 0.01);  // radii and caps scale with girth
+  EXPECT_NEAR(v1 / v0, 1.5 * 1.5 * 1.5, 0.01);  // radii and caps scale with girth, the axis with length
 }
 
 TEST(BodyTemplate, ExportsPlyWithSegmentLabels) {
