@@ -63,6 +63,11 @@ struct Camera {
   void Check(const std::string& source = {}) const;
 };
 
+// A camera at `center_in_world` looking at `target_in_world`, image x along the horizontal
+// (world up = +z maps to image up), principal point at the image centre, no distortion.
+Camera LookAtCamera(const std::string& name, const Eigen::Vector3d& center_in_world,
+                    const Eigen::Vector3d& target_in_world, int width_px, int height_px, double focal_px);
+
 // Undistorts an image so it matches the ideal pinhole camera with the same K (bilinear).
 Image UndistortImage(const Camera& camera, const Image& image);
 

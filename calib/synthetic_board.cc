@@ -205,21 +205,10 @@ Rig MakeRingRig(int count, double radius_m, double height_m, const Eigen::Vector
   for (int i = 0; i < count; ++i) {
     const double angle = 2.0 * M_PI * i / count;
     const Eigen::Vector3d centre(radius_m * std::cos(angle), radius_m * std::sin(angle), height_m);
-    const Eigen::Vector3d z_axis = (target_in_world - centre).normalized();
-    const Eigen::Vector3d x_axis = z_axis.cross(Eigen::Vector3d::UnitZ()).normalized();
-    const Eigen::Vector3d y_axis = z_axis.cross(x_axis);
-    Camera camera;
     char name[16];
     std::snprintf(name, sizeof(name), "cam%02d", i);
-    camera.name = name;
-    camera.width = width;
-    camera.height = height;
-    camera.K << focal_px, 0.0, 0.5 * (width - 1), 0.0, focal_px, 0.5 * (height - 1), 0.0, 0.0, 1.0;
+    Camera camera = LookAtCamera(name, centre, target_in_world, width, height, focal_px);
     camera.dist = dist;
-    camera.rotation.row(0) = x_axis.transpose();
-    camera.rotation.row(1) = y_axis.transpose();
-    camera.rotation.row(2) = z_axis.transpose();
-    camera.translation = -camera.rotation * centre;
     rig.cameras.push_back(camera);
   }
   return rig;

@@ -20,25 +20,6 @@ void StudioRigOptions::Check() const {
   if (!target_in_world.allFinite()) throw UsageError("target: must be finite");
 }
 
-Camera LookAtCamera(const std::string& name, const Eigen::Vector3d& center_in_world,
-                    const Eigen::Vector3d& target_in_world, int width_px, int height_px, double focal_px) {
-  const Eigen::Vector3d z = (target_in_world - center_in_world).normalized();
-  Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ());
-  if (x.norm() < 1e-9) x = Eigen::Vector3d::UnitX();  // looking straight up or down
-  x.normalize();
-  const Eigen::Vector3d y = z.cross(x);
-  Camera camera;
-  camera.name = name;
-  camera.width = width_px;
-  camera.height = height_px;
-  camera.K << focal_px, 0, (width_px - 1) / 2.0, 0, focal_px, (height_px - 1) / 2.0, 0, 0, 1;
-  camera.rotation.row(0) = x.transpose();
-  camera.rotation.row(1) = y.transpose();
-  camera.rotation.row(2) = z.transpose();
-  camera.translation = -camera.rotation * center_in_world;
-  return camera;
-}
-
 Rig MakeStudioRig(const StudioRigOptions& options) {
   options.Check();
   std::mt19937 rng(options.seed * 7919u + 13u);

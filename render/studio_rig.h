@@ -31,9 +31,5 @@ struct StudioRigOptions {
 // The rig: ring cameras first, then the held-out cameras. Deterministic for given options.
 Rig MakeStudioRig(const StudioRigOptions& options = {});
 
-// A camera at `center_in_world` looking at `target_in_world`, image x along the horizontal
-// (world up = +z maps to image up).
-Camera LookAtCamera(const std::string& name, const Eigen::Vector3d& center_in_world,
-                    const Eigen::Vector3d& target_in_world, int width_px, int height_px, double focal_px);
 
 }  // namespace confluent

@@ -14,21 +14,9 @@ Rig FixtureRig(const FixtureOptions& options) {
   for (int i = 0; i < options.num_cameras; ++i) {
     const double angle = 2 * M_PI * i / options.num_cameras;
     const Eigen::Vector3d center(3 * std::cos(angle), 3 * std::sin(angle), 1.2);
-    const Eigen::Vector3d forward = (target - center).normalized();
-    const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-    const Eigen::Vector3d down = forward.cross(right);
-    Camera camera;
     char name[16];
     std::snprintf(name, sizeof name, "cam%02d", i);
-    camera.name = name;
-    camera.width = options.width;
-    camera.height = options.height;
-    camera.K << options.width * 0.9, 0, (options.width - 1) / 2.0, 0, options.width * 0.9, (options.height - 1) / 2.0,
-        0, 0, 1;
-    camera.rotation.row(0) = right.transpose();
-    camera.rotation.row(1) = down.transpose();
-    camera.rotation.row(2) = forward.transpose();
-    camera.translation = -camera.rotation * center;
+    const Camera camera = LookAtCamera(name, center, target, options.width, options.height, options.width * 0.9);
     rig.cameras.push_back(camera);
   }
   return rig;
