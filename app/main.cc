@@ -106,4 +106,7 @@ int Main(int argc, char** argv) {
 }  // namespace
 }  // namespace confluent::app
 
-int main(int argc, char** argv) { return confluent::app::Main(argc, argv); }
+int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // keep stdout lines in order with the progress on stderr
+  return confluent::app::Main(argc, argv);
+}

@@ -16,7 +16,7 @@ using RowMatrixX2d = Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>;
 struct Mesh {
   RowMatrixX3d vertices;        // n x 3 positions
   RowMatrixX3i faces;           // m x 3 vertex indices, counter-clockwise seen from outside
-  RowMatrixX3f colors;          // n x 3 linear RGB in [0,1], or empty
+  RowMatrixX3f colors;          // n x 3 RGB in [0,1] as stored in the file (uchar / 255), or empty
   RowMatrixX2d uvs;             // k x 2 texture coordinates (u right, v up), or empty
   RowMatrixX3i face_uvs;        // m x 3 indices into `uvs`, or empty
   std::string texture_path;     // absolute path of the diffuse texture image, or empty
