@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"
+#include "render/studio_presets.h"
 #include "render/studio_synth.h"
 #include "tests/support/test_support.h"
 
@@ -43,18 +44,14 @@ TEST(StudioRig, RingAndHeldOutCamerasLookAtTheTarget) {
   EXPECT_GT(rig.cameras[9].center_in_world().z(), 2.4);
 }
 
+// The tiny preset, cut down further: 4 + 1 cameras, 4 frames.
 StudioSynthOptions TinyOptions(const std::string& dir) {
-  StudioSynthOptions options;
+  StudioSynthOptions options = StudioSynthPreset("tiny");
   options.capture_dir = dir + "/capture";
-  options.rig.num_ring_cameras = 4;
   options.rig.num_heldout_cameras = 1;
-  options.rig.width_px = 160;
-  options.rig.height_px = 120;
   options.motion.num_frames = 4;
   options.motion.fps = 1.0;
-  options.actor.target_triangles = 12000;
   options.scene.floor_texture_px = 256;
-  options.threads = 1;
   return options;
 }
 
