@@ -203,7 +203,8 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
     }
     return ious;
   }
-  const Eigen::Vector3d margin = Eigen::Vector3d::Constant(coarse.voxel_m);
+  // Thin limbs can fall between coarse voxel centres: pad the bounds generously.
+  const Eigen::Vector3d margin = Eigen::Vector3d::Constant(3 * coarse.voxel_m);
   Grid grid = MakeGrid(lower - margin, upper + margin, options.grid_resolution);
 
   // Pass 2: per voxel, how many source cameras reject it, and which one last did.
