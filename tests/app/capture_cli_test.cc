@@ -40,12 +40,11 @@ std::string Slurp(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-void ReplaceInFile(const std::string& path, const std::string& from, const std::string& to) {
-  std::string text = Slurp(path);
-  const auto at = text.find(from);
-  ASSERT_NE(at, std::string::npos) << from << " not in " << path;
-  text.replace(at, from.size(), to);
-  std::ofstream(path) << text;
+// Rewrites the first match of `pattern` in the text file `path` by `replacement` ($1 etc. allowed).
+void EditFirstMatch(const std::string& path, const std::string& pattern, const std::string& replacement) {
+  const std::string text = Slurp(path);
+  ASSERT_TRUE(std::regex_search(text, std::regex(pattern))) << pattern << " not in " << path;
+  std::ofstream(path) << std::regex_replace(text, std::regex(pattern), replacement, std::regex_constants::format_first_only);
 }
 
 TEST(CaptureCli, ValidCaptureIsSummarised) {
@@ -65,18 +64,14 @@ TEST(CaptureCli, NanInKIsNamed) {
   TempDir dir;
   testing::WriteFixtureCapture(dir / "cap");
   // Replace the focal length of the first K matrix by .nan.
-  std::string intri = Slurp(dir / "cap/intri.yml");
-  const std::regex first_k("(K_cam00:[^\\[]*\\[\\s*)([-0-9.e+]+)");
-  std::ofstream(dir / "cap/intri.yml") << std::regex_replace(intri, first_k, "$1.nan", std::regex_constants::format_first_only);
+  EditFirstMatch(dir / "cap/intri.yml", "(K_cam00:[^\\[]*\\[\\s*)([-0-9.e+]+)", "$1.nan");
   ExpectOneLineErrorNaming(RunConfluent({"capture", "info", dir / "cap"}), "intri.yml", "nan|finite");
 }
 
 TEST(CaptureCli, NonNumericYamlEntryIsNamed) {
   TempDir dir;
   testing::WriteFixtureCapture(dir / "cap");
-  std::string intri = Slurp(dir / "cap/intri.yml");
-  const std::regex first_k("(K_cam01:[^\\[]*\\[\\s*)([-0-9.e+]+)");
-  std::ofstream(dir / "cap/intri.yml") << std::regex_replace(intri, first_k, "$1abc", std::regex_constants::format_first_only);
+  EditFirstMatch(dir / "cap/intri.yml", "(K_cam01:[^\\[]*\\[\\s*)([-0-9.e+]+)", "$1abc");
   ExpectOneLineErrorNaming(RunConfluent({"capture", "info", dir / "cap"}), "intri.yml", "cam01|numeric|number|parse");
 }
 
@@ -84,10 +79,8 @@ TEST(CaptureCli, UnknownDistortionModelIsNamed) {
   TempDir dir;
   testing::WriteFixtureCapture(dir / "cap");
   // An 8-coefficient rational model with non-zero k4..k6 cannot be represented.
-  std::string intri = Slurp(dir / "cap/intri.yml");
-  const std::regex dist("dist_cam02:[^\\]]*\\]");
-  std::ofstream(dir / "cap/intri.yml") << std::regex_replace(
-      intri, dist, "dist_cam02: !!opencv-matrix\n   rows: 1\n   cols: 8\n   dt: d\n   data: [ 0.1, 0.01, 0., 0., 0., 0.2, 0.1, 0.05 ]");
+  EditFirstMatch(dir / "cap/intri.yml", "dist_cam02:[^\\]]*\\]",
+                 "dist_cam02: !!opencv-matrix\n   rows: 1\n   cols: 8\n   dt: d\n   data: [ 0.1, 0.01, 0., 0., 0., 0.2, 0.1, 0.05 ]");
   ExpectOneLineErrorNaming(RunConfluent({"capture", "info", dir / "cap"}), "intri.yml", "distortion");
 }
 
