@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "app/commands.h"
+#include "app/run_folder.h"
 #include "calib/capture.h"
 #include "calib/rig_check.h"
 #include "core/error.h"
@@ -20,38 +21,64 @@ int RunDemo(const ParsedArgs& args, const Context& context) {
   const fs::path capture_dir = out / "capture";
   const fs::path truth_dir = out / "capture_gt";
 
+  double synth_seconds = 0;
   // 1. The embedded default capture, synthesised once (a finished capture has its synth.json).
   if (!fs::exists(truth_dir / "synth.json")) {
-    std::printf("[1/3] synthesising the default capture (%s preset) into %s\n", preset.c_str(), capture_dir.c_str());
+    std::printf("[1/4] synthesising the default capture (%s preset) into %s\n", preset.c_str(), capture_dir.c_str());
     StudioSynthOptions options = StudioSynthPreset(preset, "--preset");
     options.capture_dir = capture_dir.string();
     options.ground_truth_dir = truth_dir.string();
     const StudioSynthSummary summary = SynthesizeCapture(options, context.make_progress());
+    synth_seconds = summary.seconds;
     std::printf("      %d cameras x %d frames, actor %d triangles, %.1f s\n", summary.num_cameras, summary.num_frames,
                 summary.num_triangles, summary.seconds);
   } else {
-    std::printf("[1/3] reusing the capture in %s\n", capture_dir.c_str());
+    std::printf("[1/4] reusing the capture in %s\n", capture_dir.c_str());
   }
 
-  // 2. Validate the recorded camera folder.
+  // 2. Validate the recorded camera folder and check its calibration (overlays).
   const Capture capture = Capture::Open(capture_dir.string());
-  std::printf("[2/3] capture valid: %d cameras, %d frames\n", capture.num_cameras(), capture.num_frames());
-
-  // 3. Calibration check with overlays, and hull consistency against the ground-truth masks.
   const RigCheckReport report = CheckRig(capture.rig());
   const fs::path check_dir = out / "check";
-  std::vector<Image> masks;
-  for (int c = 0; c < capture.num_cameras(); ++c) {
+  for (int c = 0; c < capture.num_cameras(); ++c)
     WriteImage((check_dir / (capture.rig().cameras[c].name + ".png")).string(),
                DrawWorldOverlay(capture.rig().cameras[c], capture.ReadFrame(c, 0)));
-    masks.push_back(ReadMaskFile((truth_dir / "masks" / capture.rig().cameras[c].name / "000000.png").string()));
-  }
-  const std::vector<double> ious = VisualHullConsistency(capture.rig(), masks, {});
-  double mean_iou = 0;
-  for (double iou : ious) mean_iou += iou / ious.size();
-  std::printf("[3/3] calibration: %zu warning(s); visual-hull consistency of the true masks: mean IoU %.3f\n",
-              report.warnings.size(), mean_iou);
-  std::printf("\n%s\noverlays: %s\n", report.ToString().c_str(), check_dir.c_str());
+  std::printf("[2/4] capture valid: %d cameras, %d frames; calibration: %zu warning(s), overlays in %s\n",
+              capture.num_cameras(), capture.num_frames(), report.warnings.size(), check_dir.c_str());
+  for (const std::string& warning : report.warnings) std::printf("      warning: %s\n", warning.c_str());
+
+  // 3. The pipeline with the studio's held-out cameras excluded (resumes when run again).
+  std::vector<std::string> heldout;
+  for (const std::string& name : capture.rig().names())
+    if (name.rfind("holdout", 0) == 0) heldout.push_back(name);
+  if (heldout.empty()) throw InputError(capture_dir.string(), "the capture has no holdout<N> cameras to evaluate on");
+  const fs::path run_dir = out / "run";
+  std::vector<std::string> run_args = {capture_dir.string(), "--out", run_dir.string()};
+  for (const std::string& name : heldout) run_args.insert(run_args.end(), {"--exclude-camera", name});
+  std::printf("[3/4] confluent run");
+  for (const std::string& arg : run_args) std::printf(" %s", arg.c_str());
+  std::printf("\n");
+  std::fflush(stdout);
+  const CommandSpec run = MakeRunCommand();
+  if (int status = run.run(ParseArgs(run, run_args), context); status != 0) return status;
+
+  // 4. Held-out evaluation against the ground truth.
+  std::vector<std::string> evaluate_args = {capture_dir.string(), "--run", run_dir.string(), "--masks",
+                                            (truth_dir / "masks").string(), "--gt-meshes", (truth_dir / "meshes").string()};
+  for (const std::string& name : heldout) evaluate_args.insert(evaluate_args.end(), {"--heldout", name});
+  std::printf("[4/4] confluent evaluate");
+  for (const std::string& arg : evaluate_args) std::printf(" %s", arg.c_str());
+  std::printf("\n");
+  std::fflush(stdout);
+  const CommandSpec evaluate = MakeEvaluateCommand();
+  if (int status = evaluate.run(ParseArgs(evaluate, evaluate_args), context); status != 0) return status;
+
+  TimingLog timings((run_dir / "timings.csv").string());
+  std::printf("\ntime per stage (s): synth %.0f (when made), silhouettes %.1f, tracking %.1f, correspondences %.1f, "
+              "deform %.1f, render %.1f\n", synth_seconds, timings.StageSeconds("silhouettes"), timings.StageSeconds("tracking"),
+              timings.StageSeconds("correspondences"), timings.StageSeconds("deform_factor") + timings.StageSeconds("deform"),
+              timings.StageSeconds("render") + timings.StageSeconds("video"));
+  std::printf("3D video: %s\nreport:   %s\n", (run_dir / "renders" / "orbit.mp4").c_str(), (run_dir / "report.html").c_str());
   return 0;
 }
 
@@ -63,8 +90,10 @@ CommandSpec MakeDemoCommand() {
   spec.summary = "synthesise the embedded default capture and run the pipeline on it";
   spec.usage = "[--out DIR] [--preset default|tiny]";
   spec.description =
-      "Synthesises the default studio capture into DIR/capture (once; reused afterwards), validates it, and\n"
-      "checks its calibration (overlays in DIR/check). The later pipeline stages join as they land.";
+      "Synthesises the default studio capture into DIR/capture and its ground truth into DIR/capture_gt (once;\n"
+      "reused afterwards), checks the calibration (overlays in DIR/check), runs `confluent run` with the\n"
+      "studio's held-out cameras excluded (DIR/run; resumes when interrupted) and `confluent evaluate` on them\n"
+      "against the ground truth, then prints the summary table and where the 3D video and report.html are.";
   spec.options = {
       {"out", "DIR", "output folder (default ./demo)"},
       {"preset", "NAME", "studio preset: default or tiny (default: default)"},

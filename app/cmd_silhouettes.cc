@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.h"
+#include "app/frame_range.h"
 #include "calib/capture.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -21,40 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// "A:B" (B exclusive; either may be empty), "A" (one frame) -> [first, end).
-void ParseFrameRange(const std::string& text, int num_frames, int* first, int* end) {
-  *first = 0;
-  *end = num_frames;
-  if (text.empty()) return;
-  auto number = [&](const std::string& part, int fallback) {
-    if (part.empty()) return fallback;
-    std::size_t used = 0;
-    int value = 0;
-    try {
-      value = std::stoi(part, &used);
-    } catch (const std::exception&) {
-      used = std::string::npos;
-    }
-    if (used != part.size()) throw UsageError("--frames: expected A:B with frame numbers, got '" + text + "'");
-    return value;
-  };
-  const std::size_t colon = text.find(':');
-  if (colon == std::string::npos) {
-    *first = number(text, 0);
-    *end = *first + 1;
-  } else {
-    *first = number(text.substr(0, colon), 0);
-    *end = number(text.substr(colon + 1), num_frames);
-  }
-  if (*first < 0 || *end > num_frames || *first >= *end)
-    throw UsageError("--frames " + text + ": not a non-empty range within 0:" + std::to_string(num_frames));
-}
-
-std::string FrameName(int frame) {
-  char name[16];
-  std::snprintf(name, sizeof name, "%06d.png", frame);
-  return name;
-}
+std::string FrameName(int frame) { return FrameStem(frame) + ".png"; }
 
 nlohmann::json SummaryJson(const Capture& capture, const SilhouetteSummary& summary, int first, int end) {
   nlohmann::json json;
@@ -101,8 +69,8 @@ int RunSilhouettes(const ParsedArgs& args, const Context& context) {
   CaptureOptions capture_options;
   capture_options.check_every_image_header = false;
   const Capture capture = Capture::Open(root, capture_options);
-  int first = 0, end = 0;
-  ParseFrameRange(args.get("frames"), capture.num_frames(), &first, &end);
+  const FrameRange range = ParseFrameRange(args.get("frames"), capture.num_frames());
+  const int first = range.first, end = range.end;
 
   // Contact sheets: tiles wait here until every camera of their frame is done.
   std::mutex mutex;

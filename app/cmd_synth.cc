@@ -6,6 +6,7 @@
 
 #include "app/commands.h"
 #include "core/error.h"
+#include "core/bvh_retarget.h"
 #include "render/studio_presets.h"
 
 namespace confluent::app {
@@ -44,6 +45,14 @@ int RunSynth(const ParsedArgs& args, const Context& context) {
   if (up != "y" && up != "z") throw UsageError("--up: expected y or z, got '" + up + "'");
   options.sequence_up_axis = up[0];
   if (!options.actor_sequence_dir.empty() && !args.has("frames")) options.motion.num_frames = 1 << 20;
+  options.motion.bvh_path = args.get("bvh");
+  options.motion.bvh.joint_map = ParseBvhJointMap(args.get("bvh-map"), "--bvh-map");
+  const std::string bvh_up = args.get("bvh-up", "auto");
+  if (bvh_up != "auto" && bvh_up != "y" && bvh_up != "z") throw UsageError("--bvh-up: expected auto, y or z, got '" + bvh_up + "'");
+  options.motion.bvh.up_axis = bvh_up == "auto" ? 'a' : bvh_up[0];
+  if (!options.motion.bvh_path.empty() && !options.actor_sequence_dir.empty())
+    throw UsageError("--bvh drives the procedural actor; it cannot be combined with --actor-sequence");
+  if (!options.motion.bvh_path.empty() && !args.has("frames")) options.motion.num_frames = 1 << 20;
   const StudioSynthSummary summary = SynthesizeCapture(options, context.make_progress());
   std::printf("wrote %s: %d cameras x %d frames (actor: %d vertices, %d triangles) in %.1f s\n",
               summary.capture_dir.c_str(), summary.num_cameras, summary.num_frames, summary.num_vertices,
@@ -67,7 +76,10 @@ CommandSpec MakeSynthCommand() {
       "ground-truth folder (masks, per-frame meshes, joints.json, skeleton.json, scan.ply).\n"
       "World frame: Z up, floor z = 0, metres; the actor faces +y at rest. --preset tiny makes a small test\n"
       "fixture (4+2 cameras, 160x120, 10 frames, ~16K triangles). --actor-sequence DIR renders a mesh\n"
-      "sequence (one .obj/.ply per frame, fixed topology) instead of the procedural actor.";
+      "sequence (one .obj/.ply per frame, fixed topology) instead of the procedural actor. --bvh FILE makes\n"
+      "the procedural actor perform a motion-capture file (CMU, Mixamo, MakeHuman ... joint names are mapped\n"
+      "automatically, bone directions retargeted, Y-up turned to Z-up), sampled at --fps; without --frames,\n"
+      "the whole file.";
   spec.options = {{"out", "CAPTURE", "capture folder to write", false, true},
                   {"gt", "DIR", "ground-truth folder (default: CAPTURE_gt beside CAPTURE)"},
                   {"preset", "NAME", "default or tiny"},
@@ -90,7 +102,10 @@ CommandSpec MakeSynthCommand() {
                   {"seed", "N", "random seed (default 1)"},
                   {"threads", "N", "encoding threads (default 2)"},
                   {"actor-sequence", "DIR", "render this mesh sequence instead of the procedural actor"},
-                  {"up", "AXIS", "up axis of the actor sequence: z (default) or y"}};
+                  {"up", "AXIS", "up axis of the actor sequence: z (default) or y"},
+                  {"bvh", "FILE", "perform this BVH motion (retargeted to the actor) instead of the built-in one"},
+                  {"bvh-map", "T=B,...", "BVH joint names for actor joints, e.g. left_shoulder=LeftArm"},
+                  {"bvh-up", "AXIS", "up axis of the BVH: auto (default), y or z"}};
   spec.run = RunSynth;
   return spec;
 }

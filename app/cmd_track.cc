@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "app/commands.h"
+#include "app/frame_range.h"
 #include "calib/capture.h"
 #include "calib/rig_check.h"
 #include "core/atomic_file.h"
@@ -23,30 +24,6 @@ namespace confluent::app {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string FrameStem(int frame) {
-  char name[16];
-  std::snprintf(name, sizeof name, "%06d", frame);
-  return name;
-}
-
-// A mask file as 1-channel 0/255.
-Image LoadMask(const std::string& path) {
-  if (!fs::exists(path)) throw InputError(path, "mask file not found");
-  Image image = ReadImage(path);
-  Image mask(image.width, image.height, 1);
-  for (int y = 0; y < image.height; ++y)
-    for (int x = 0; x < image.width; ++x) {
-      double v = 0;
-      for (int c = 0; c < std::min(image.channels, 3); ++c) {
-        if (image.type == PixelType::kUInt8) v = std::max<double>(v, image.at<std::uint8_t>(x, y, c));
-        else if (image.type == PixelType::kUInt16) v = std::max<double>(v, image.at<std::uint16_t>(x, y, c) / 257.0);
-        else v = std::max<double>(v, image.at<float>(x, y, c) * 255.0);
-      }
-      mask.at<std::uint8_t>(x, y) = v >= 128 ? 255 : 0;
-    }
-  return mask;
-}
 
 // Ground-truth joints.json of `confluent synth`: joint names and per-frame positions.
 struct GroundTruthJoints {
@@ -100,24 +77,8 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
   const std::string masks_dir = args.get("masks", (fs::path(root) / "masks").string());
   if (!fs::is_directory(masks_dir))
     throw InputError(masks_dir, "no masks folder (run `confluent silhouettes` first, or pass --masks DIR)");
-  int first = 0, end = capture.num_frames();
-  if (args.has("frames")) {
-    const std::string text = args.get("frames");
-    const std::size_t colon = text.find(':');
-    try {
-      if (colon == std::string::npos) {
-        first = std::stoi(text);
-        end = first + 1;
-      } else {
-        if (colon > 0) first = std::stoi(text.substr(0, colon));
-        if (colon + 1 < text.size()) end = std::stoi(text.substr(colon + 1));
-      }
-    } catch (const std::exception&) {
-      throw UsageError("--frames: expected A:B, got '" + text + "'");
-    }
-    if (first < 0 || end > capture.num_frames() || first >= end)
-      throw UsageError("--frames " + text + ": not a non-empty range within 0:" + std::to_string(capture.num_frames()));
-  }
+  const FrameRange range = ParseFrameRange(args.get("frames"), capture.num_frames());
+  const int first = range.first, end = range.end;
   const int overlay_every = args.get_int("overlay-every", 25);
   TrackerOptions options;
   options.fit.downscale = args.get_int("downscale", options.fit.downscale);
@@ -144,10 +105,10 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
     for (int c = 0; c < rig.size(); ++c) {
       const std::string path = mask_path(c, frame);
       if (excluded[c]) {
-        if (fs::exists(path)) masks[c] = LoadMask(path);  // for the held-out overlap only
+        if (fs::exists(path)) masks[c] = ReadMaskFile(path);  // for the held-out overlap only
         continue;
       }
-      masks[c] = LoadMask(path);
+      masks[c] = ReadMaskFile(path);
       if (masks[c].width != rig.cameras[c].width || masks[c].height != rig.cameras[c].height)
         throw InputError(path, "mask size differs from the calibration of camera " + rig.cameras[c].name);
     }

@@ -17,5 +17,10 @@ CommandSpec MakeSynthCommand();          // cmd_synth.cc
 CommandSpec MakeSilhouettesCommand();    // cmd_silhouettes.cc
 CommandSpec MakeAnimateCommand();        // cmd_animate.cc
 CommandSpec MakeTrackCommand();          // cmd_track.cc
+CommandSpec MakeCorrespondCommand();     // cmd_correspond.cc
+CommandSpec MakeRunCommand();            // cmd_run.cc
+CommandSpec MakeEvaluateCommand();       // cmd_evaluate.cc
+CommandSpec MakeViewCommand();           // cmd_view.cc
+CommandSpec MakeRenderCommand();         // cmd_render.cc
 
 }  // namespace confluent::app

@@ -26,6 +26,11 @@ std::vector<CommandSpec> AllCommands() {
       MakeSilhouettesCommand(),
       MakeAnimateCommand(),
       MakeTrackCommand(),
+      MakeCorrespondCommand(),
+      MakeRunCommand(),
+      MakeEvaluateCommand(),
+      MakeViewCommand(),
+      MakeRenderCommand(),
   };
 }
 

@@ -19,7 +19,9 @@ enum class CholeskyStatus {
 
 // Factors a symmetric positive definite sparse matrix A = L L^T once (fill-reducing ordering,
 // supernodal) and solves A X = B for dense B with many columns. Only the lower triangle of A
-// is read. Solve() reuses workspace, so one object must not be used from two threads at once.
+// is read. Solve() reuses workspace, so one object must not be used from two threads at once;
+// with set_threads(2) one Solve() itself splits the triangular solves over two threads
+// (independent subtrees of the elimination tree).
 class SparseCholesky {
  public:
   SparseCholesky();
@@ -35,6 +37,14 @@ class SparseCholesky {
 
   // Solves A X = B for B of size n x k (any k >= 1). Aborts if no factor is held.
   Eigen::MatrixXd Solve(const Eigen::MatrixXd& rhs) const;
+
+  // Solves A X = B in place for B of size n x k stored row-major (k values per row, any k >= 1),
+  // without allocating once the workspace exists. Aborts if no factor is held.
+  void SolveRowMajor(double* rhs_in_solution_out, int k) const;
+
+  // Threads that one Solve() may use (1 = the calling thread only; default 1). Small systems
+  // are solved on one thread regardless.
+  void set_threads(int threads);
 
   bool is_factored() const;
   int rows() const;                   // n, or 0 without a factor

@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <stdexcept>
+#include <thread>
 
 #include "core/error.h"
 #include "deform/cholmod_solver.h"
@@ -18,7 +19,7 @@ namespace confluent {
 void ConfluentMotionOptions::Check() const {
   laplacian.Check();
   if (!(singular_w >= 0.0 && singular_w < 1.0) || max_segment_fields < 1 || !(segment_rigid_tolerance_rad >= 0.0) ||
-      !(position_weight >= 0.0))
+      !(position_weight >= 0.0) || threads < 1)
     std::abort();
 }
 
@@ -56,6 +57,26 @@ bool TriangleRotation(const Eigen::Matrix3d& from, const Eigen::Matrix3d& to, Ei
   rotation->normalize();
   return true;
 }
+
+// Runs fn(begin, end, part) on `parts` contiguous parts of [0, count), one thread per part
+// (the calling thread takes part 0); below `min_count` items, one part.
+template <typename Function>
+void ForRanges(int count, int parts, int min_count, const Function& fn) {
+  if (parts <= 1 || count < min_count) {
+    fn(0, count, 0);
+    return;
+  }
+  std::vector<std::thread> helpers;
+  for (int p = 1; p < parts; ++p)
+    helpers.emplace_back([&fn, count, parts, p] {
+      fn(static_cast<int>(static_cast<long>(count) * p / parts), static_cast<int>(static_cast<long>(count) * (p + 1) / parts), p);
+    });
+  fn(0, static_cast<int>(count / parts), 0);
+  for (std::thread& helper : helpers) helper.join();
+}
+
+// Below this many vertices or faces, a per-frame loop runs on one thread.
+constexpr int kMinParallelItems = 8192;
 
 Eigen::Matrix3d Corners(const RowMatrixX3d& vertices, const RowMatrixX3i& faces, int f) {
   Eigen::Matrix3d corners;
@@ -104,6 +125,10 @@ struct ConfluentMotion::Impl {
   std::vector<Eigen::Vector4d> previous_constraints;  // aligned, relative to the active reference
   std::vector<Eigen::Vector4d> previous_full;  // aligned, relative to the reference pose
   int previous_reference = -2;             // active reference of the previous frame
+  // Per-frame buffers, kept to avoid allocations: vertex quaternions and, per extra thread, a
+  // right-hand side of its own.
+  RowMatrixX4d vertex_q;
+  std::vector<RowMatrixX3d> partial_rhs;
   // Intermediate reference (report section 4.3).
   int intermediate_frame = -1;
   RowMatrixX3d intermediate_template;
@@ -296,6 +321,7 @@ ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_referenc
     s.harmonic_rhs = minus_l_fc * s.average;
     if (num_free > 0 && s.harmonic.Factor(l_ff) != CholeskyStatus::kOk)
       throw InputError(scan_source, "the harmonic interpolation system cannot be factored: " + s.harmonic.message());
+    s.harmonic.set_threads(options.threads);
     s.setup.harmonic_factor_nonzeros = s.harmonic.factor_nonzeros();
   }
 
@@ -352,6 +378,7 @@ ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_referenc
     pin.setFromTriplets(pins.begin(), pins.end());
     if (s.poisson.Factor(laplacian + pin) != CholeskyStatus::kOk)
       throw InputError(scan_source, "the Poisson system cannot be factored: " + s.poisson.message());
+    s.poisson.set_threads(options.threads);
     s.setup.poisson_factor_nonzeros = s.poisson.factor_nonzeros();
   }
   s.setup.factor_seconds =
@@ -461,7 +488,9 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
   }
 
   // 4. Harmonic interpolation of the 4 components (Dirichlet values at the constrained vertices).
-  RowMatrixX4d vertex_q(n, 4);
+  const int threads = s.options.threads;
+  RowMatrixX4d& vertex_q = s.vertex_q;
+  vertex_q.resize(n, 4);
   bool use_fields = s.num_segments > 0;
   Eigen::Matrix<double, Eigen::Dynamic, 4> segment_q;
   if (use_fields) {
@@ -474,7 +503,9 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
   }
   summary.used_segment_fields = use_fields;
   if (use_fields) {
-    vertex_q.noalias() = s.segment_fields * segment_q;
+    ForRanges(n, threads, kMinParallelItems, [&](int begin, int end, int) {
+      vertex_q.middleRows(begin, end - begin).noalias() = s.segment_fields.middleRows(begin, end - begin) * segment_q;
+    });
   } else {
     Eigen::MatrixXd constraint_q(m, 4);
     for (int k = 0; k < m; ++k) constraint_q.row(k) = q[k].transpose();
@@ -488,31 +519,43 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
 
   // 5. Per-face rotation: normalised average of the corner quaternions (composed with the
   // intermediate reference's rotation), then the right-hand side U_reduced: the cotangent
-  // Laplacian of the fragmented mesh of rotated reference triangles, summed per vertex.
+  // Laplacian of the fragmented mesh of rotated reference triangles, summed per vertex. Faces
+  // are split over the threads; each thread sums into a right-hand side of its own.
   RowMatrixX4d face_q(num_faces, 4);
   RowMatrixX3d rhs = RowMatrixX3d::Zero(n, 3);
+  const int parts = num_faces >= kMinParallelItems ? threads : 1;
+  s.partial_rhs.resize(parts - 1);
+  for (RowMatrixX3d& partial : s.partial_rhs) partial.setZero(n, 3);
+  std::vector<int> vanishing_in(parts, 0);
+  ForRanges(num_faces, parts, kMinParallelItems, [&](int begin, int end, int part) {
+    RowMatrixX3d& out = part == 0 ? rhs : s.partial_rhs[part - 1];
+    int vanishing = 0;
+    for (int f = begin; f < end; ++f) {
+      const int* corner = &s.scan_faces(f, 0);
+      Eigen::Vector4d sum = (vertex_q.row(corner[0]) + vertex_q.row(corner[1]) + vertex_q.row(corner[2])).transpose();
+      const double norm = sum.norm();
+      const bool valid = norm > 1e-9 && std::isfinite(norm);
+      Eigen::Quaterniond rotation = valid ? ToQuaternion(sum / norm) : Eigen::Quaterniond::Identity();
+      if (!valid) {
+        ++vanishing;
+        if (s.has_previous) rotation = ToQuaternion(s.previous_face_rotations.row(f).transpose());
+      } else if (reference >= 0) {
+        rotation = (rotation * ToQuaternion(s.intermediate_face_rotations.row(f).transpose())).normalized();
+      }
+      face_q.row(f) = ToVector(rotation).transpose();
+      const Eigen::Matrix3d r = rotation.toRotationMatrix();
+      for (int k = 0; k < 3; ++k) {
+        // Flux of edge (k+1, k+2): half-cotangent weight times the rotated reference edge.
+        const Eigen::Vector3d flux = r * Eigen::Map<const Eigen::Vector3d>(&s.face_edges(f, 3 * k));
+        out.row(corner[(k + 1) % 3]) += flux.transpose();
+        out.row(corner[(k + 2) % 3]) -= flux.transpose();
+      }
+    }
+    vanishing_in[part] = vanishing;
+  });
+  for (const RowMatrixX3d& partial : s.partial_rhs) rhs += partial;
   int vanishing = 0;
-  for (int f = 0; f < num_faces; ++f) {
-    const int* corner = &s.scan_faces(f, 0);
-    Eigen::Vector4d sum = (vertex_q.row(corner[0]) + vertex_q.row(corner[1]) + vertex_q.row(corner[2])).transpose();
-    const double norm = sum.norm();
-    const bool valid = norm > 1e-9 && std::isfinite(norm);
-    Eigen::Quaterniond rotation = valid ? ToQuaternion(sum / norm) : Eigen::Quaterniond::Identity();
-    if (!valid) {
-      ++vanishing;
-      if (s.has_previous) rotation = ToQuaternion(s.previous_face_rotations.row(f).transpose());
-    } else if (reference >= 0) {
-      rotation = (rotation * ToQuaternion(s.intermediate_face_rotations.row(f).transpose())).normalized();
-    }
-    face_q.row(f) = ToVector(rotation).transpose();
-    const Eigen::Matrix3d r = rotation.toRotationMatrix();
-    for (int k = 0; k < 3; ++k) {
-      // Flux of edge (k+1, k+2): half-cotangent weight times the rotated reference edge.
-      const Eigen::Vector3d flux = r * Eigen::Map<const Eigen::Vector3d>(&s.face_edges(f, 3 * k));
-      rhs.row(corner[(k + 1) % 3]) += flux.transpose();
-      rhs.row(corner[(k + 2) % 3]) -= flux.transpose();
-    }
-  }
+  for (int count : vanishing_in) vanishing += count;
   if (vanishing > 0)
     summary.warnings.push_back(std::to_string(vanishing) +
                                " faces got a vanishing interpolated quaternion (kept their previous rotation)");
@@ -536,8 +579,8 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
       }
 
   // 7. Solve L x = U_reduced (plus the positional terms) with the factor computed once.
-  const Eigen::MatrixXd solved = s.poisson.Solve(Eigen::MatrixXd(rhs));
-  RowMatrixX3d result = solved;
+  RowMatrixX3d result = std::move(rhs);
+  s.poisson.SolveRowMajor(result.data(), 3);
 
   // 8. Global position: per component, the translation that best places the correspondence
   // centroids at their targets (zero up to round-off with positional constraints).

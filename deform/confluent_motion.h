@@ -39,6 +39,9 @@ struct ConfluentMotionOptions {
   bool segment_fields = true;
   int max_segment_fields = 64;          // more distinct labels than this: no weight fields
   double segment_rigid_tolerance_rad = 1e-5;  // max angle between rotations within a segment
+  // Threads one Deform() uses for the per-face assembly and the triangular solves (1 = serial;
+  // small scans run serially regardless). The result does not depend on it beyond round-off.
+  int threads = 2;
   void Check() const;  // aborts on invalid values
 };
 

@@ -775,6 +775,7 @@ struct MeshRenderer::Impl {
       remap.Ensure(camera.width, camera.height, float_color, /*want_depth=*/false);
       glViewport(0, 0, camera.width, camera.height);
       glDisable(GL_DEPTH_TEST);
+      glDisable(GL_CULL_FACE);  // the full-screen triangle must not be culled (cull_back_faces)
       glDrawBuffers(kNumAttachments, draw_buffers);
       glUseProgram(remap_program);
       const char* samplers[kNumAttachments] = {"ideal_color", "ideal_camera_z", "ideal_triangle_id", "ideal_mask"};

@@ -156,4 +156,21 @@ std::vector<Pose> DefaultPerformance(const Skeleton& skeleton, const StudioMotio
   return poses;
 }
 
+std::vector<Pose> BvhPerformance(const Skeleton& skeleton, const StudioMotionOptions& options,
+                                 BvhRetargetResult* retarget) {
+  options.Check();
+  if (options.bvh_path.empty()) throw UsageError("bvh performance: no BVH file given");
+  BvhRetargetResult result = RetargetBvhFile(options.bvh_path, skeleton, options.bvh);
+  std::vector<Pose> poses = SampleRetargetedMotion(result, options.fps, options.speed, options.num_frames);
+  if (retarget) {
+    result.poses.clear();
+    *retarget = std::move(result);
+  }
+  return poses;
+}
+
+std::vector<Pose> StudioPerformance(const Skeleton& skeleton, const StudioMotionOptions& options) {
+  return options.bvh_path.empty() ? DefaultPerformance(skeleton, options) : BvhPerformance(skeleton, options);
+}
+
 }  // namespace confluent

@@ -2,8 +2,10 @@
 // The studio's built-in performance: a keyframed motion of the studio skeleton with large,
 // varied movement (arms over the head, a full turn, a kick, a crouch), smoothly interpolated.
 
+#include <string>
 #include <vector>
 
+#include "core/bvh_retarget.h"
 #include "core/skeleton.h"
 
 namespace confluent {
@@ -13,6 +15,10 @@ struct StudioMotionOptions {
   int num_frames = 100;   // frames to sample
   double fps = 25.0;      // sampling rate; frames past the end hold the final (rest) pose
   double speed = 1.0;     // playback speed factor (2 = twice as fast)
+  // A BVH file to perform instead of the built-in performance (empty: built-in). It is
+  // retargeted to the actor's skeleton (core/bvh_retarget.h); frames past its end are dropped.
+  std::string bvh_path;
+  BvhRetargetOptions bvh;  // name-map overrides, axes and placement of the BVH motion
   // Throws UsageError when a value is out of range.
   void Check() const;
 };
@@ -26,5 +32,16 @@ double DefaultPerformanceDuration();
 // rotations; the root height is adjusted every frame so that the lower foot stays on the floor.
 // Frame f is at time f / fps * speed seconds. Returns num_frames poses.
 std::vector<Pose> DefaultPerformance(const Skeleton& skeleton, const StudioMotionOptions& options = {});
+
+// Samples `options.bvh_path` retargeted to `skeleton` (studio joint names): frame f is the BVH
+// at time f / fps * speed seconds (poses interpolated); at most num_frames frames, none past the
+// BVH's last frame. `retarget` (optional) receives the retargeting result (mapping, units,
+// warnings) without its per-BVH-frame poses. Throws InputError naming the BVH file for an
+// unreadable or unmappable BVH, UsageError for bad options.
+std::vector<Pose> BvhPerformance(const Skeleton& skeleton, const StudioMotionOptions& options,
+                                 BvhRetargetResult* retarget = nullptr);
+
+// The performance `options` choose: BvhPerformance when bvh_path is set, else DefaultPerformance.
+std::vector<Pose> StudioPerformance(const Skeleton& skeleton, const StudioMotionOptions& options = {});
 
 }  // namespace confluent

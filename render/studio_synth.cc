@@ -202,7 +202,7 @@ class ProceduralActor : public ActorSource {
  public:
   ProceduralActor(const StudioSynthOptions& options)
       : actor_(BuildStudioActor(options.actor)), method_(options.skinning) {
-    poses_ = DefaultPerformance(actor_.skeleton, options.motion);
+    poses_ = StudioPerformance(actor_.skeleton, options.motion);
   }
   const Mesh& rest_mesh() const override { return actor_.mesh; }
   RowMatrixX3d FrameVertices(int frame) override {
@@ -271,6 +271,7 @@ std::string OptionsJson(const StudioSynthOptions& o, const StudioSynthSummary& s
       << ",\n  \"ring_cameras\": " << o.rig.num_ring_cameras << ",\n  \"heldout_cameras\": " << o.rig.num_heldout_cameras
       << ",\n  \"width\": " << o.rig.width_px << ",\n  \"height\": " << o.rig.height_px
       << ",\n  \"actor\": \"" << (o.actor_sequence_dir.empty() ? "procedural" : o.actor_sequence_dir) << "\""
+      << ",\n  \"motion\": \"" << (o.motion.bvh_path.empty() ? "default" : o.motion.bvh_path) << "\""
       << ",\n  \"actor_vertices\": " << s.num_vertices << ",\n  \"actor_triangles\": " << s.num_triangles
       << ",\n  \"skinning\": \"" << (o.skinning == SkinningMethod::kLinear ? "linear" : "dual_quaternion") << "\""
       << ",\n  \"green_screen\": " << (o.scene.green_screen ? "true" : "false")

@@ -1,5 +1,6 @@
 #include "tracking/motion_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -7,6 +8,7 @@
 #include <sstream>
 
 #include "core/atomic_file.h"
+#include "core/error.h"
 
 namespace confluent {
 namespace {
@@ -143,6 +145,58 @@ void WritePosesJson(const std::string& path, const BodyTemplate& body, const Bod
   }
   root["frames"] = list;
   WriteTextFile(path, root.dump(1) + "\n");
+}
+
+PosesFile ReadPosesJson(const std::string& path, const BodyTemplate& body, const std::vector<std::string>& camera_names) {
+  using nlohmann::json;
+  PosesFile file;
+  file.camera_names = camera_names;
+  try {
+    const json root = json::parse(ReadTextFile(path));
+    file.fps = root.value("fps", 25.0);
+    const json& shape = root.at("shape");
+    for (int s = 0; s < kNumBodySegments; ++s) {
+      file.shape.length_scale[s] = shape.at("length_scale").at(BodySegmentName(s)).get<double>();
+      file.shape.girth_scale[s] = shape.at("girth_scale").at(BodySegmentName(s)).get<double>();
+    }
+    for (const json& jf : root.at("frames")) {
+      TrackedFrame f;
+      f.frame = jf.at("frame").get<int>();
+      const auto t = jf.at("root_translation").get<std::vector<double>>();
+      const auto r = jf.at("root_rotation_vector").get<std::vector<double>>();
+      if (t.size() != 3 || r.size() != 3) throw InputError(path, "frame " + std::to_string(f.frame) + ": root needs 3 values");
+      f.pose.root_translation = Vector3d(t[0], t[1], t[2]);
+      f.pose.root_rotation = Vector3d(r[0], r[1], r[2]);
+      for (const auto& [name, values] : jf.at("joint_angles").items()) {
+        const auto it = std::find(body.joint_names().begin(), body.joint_names().end(), name);
+        if (it == body.joint_names().end()) throw InputError(path, "unknown joint '" + name + "'");
+        const int j = static_cast<int>(it - body.joint_names().begin());
+        const auto angles = values.get<std::vector<double>>();
+        if (static_cast<int>(angles.size()) != body.dofs()[j].num_dof())
+          throw InputError(path, "joint '" + name + "' needs " + std::to_string(body.dofs()[j].num_dof()) + " angles");
+        for (std::size_t k = 0; k < angles.size(); ++k) f.pose.dofs[j][k] = angles[k];
+      }
+      f.joints = body.JointPositions(file.shape, f.pose);
+      f.mean_iou = jf.value("mean_iou", 0.0);
+      f.flags = jf.value("flags", std::vector<std::string>{});
+      f.seconds = jf.value("seconds", 0.0);
+      f.camera_iou.assign(camera_names.size(), -1.0);
+      if (jf.contains("camera_iou"))
+        for (std::size_t c = 0; c < camera_names.size(); ++c)
+          if (jf["camera_iou"].contains(camera_names[c])) f.camera_iou[c] = jf["camera_iou"][camera_names[c]].get<double>();
+      if (jf.contains("fit")) {
+        f.fit.iterations = jf["fit"].value("iterations", 0);
+        f.fit.final_cost = jf["fit"].value("final_cost", 0.0);
+        f.fit.mean_outside_px = jf["fit"].value("mean_outside_px", 0.0);
+        f.fit.mean_contour_px = jf["fit"].value("mean_contour_px", 0.0);
+        f.fit.num_cameras = jf["fit"].value("cameras", 0);
+      }
+      file.frames.push_back(std::move(f));
+    }
+  } catch (const json::exception& e) {
+    throw InputError(path, std::string("not a poses.json: ") + e.what());
+  }
+  return file;
 }
 
 }  // namespace confluent

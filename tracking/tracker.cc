@@ -1,6 +1,7 @@
 #include "tracking/tracker.h"
 
 #include <algorithm>
+#include <stdexcept>
 #include <chrono>
 #include <ctime>
 #include <cmath>
@@ -227,6 +228,16 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   return result;
+}
+
+void Tracker::Resume(const BodyShape& shape, const std::vector<TemplatePose>& recent_poses,
+                     const std::vector<double>& recent_ious) {
+  if (recent_poses.empty()) throw std::invalid_argument("Tracker::Resume: no previous pose");
+  shape_ = shape;
+  history_.assign(recent_poses.end() - std::min<std::size_t>(recent_poses.size(), 4), recent_poses.end());
+  iou_history_ = recent_ious;
+  last_mask_hashes_.clear();
+  initialized_ = true;
 }
 
 TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {

@@ -67,6 +67,9 @@ class Tracker {
   TrackedFrame Initialize(int frame, const std::vector<Image>& masks);
   // Tracks the next frame (Initialize first). Masks: one per rig camera (0/255).
   TrackedFrame Track(int frame, const std::vector<Image>& masks);
+  // Continues from saved state instead of Initialize (a resumed run, or a shard boundary): the
+  // fitted shape and the accepted poses and mean IoUs of the frames just before, oldest first.
+  void Resume(const BodyShape& shape, const std::vector<TemplatePose>& recent_poses, const std::vector<double>& recent_ious);
 
   bool initialized() const { return initialized_; }
   const BodyTemplate& body() const { return body_; }

@@ -44,12 +44,12 @@ std::string Slurp(const fs::path& path) {
 }
 }  // namespace
 
-CommandResult RunConfluent(const std::vector<std::string>& args) {
+CommandResult RunConfluent(const std::vector<std::string>& args, const std::string& shell_prefix) {
   const char* binary = std::getenv("CONFLUENT_BIN");
   if (binary == nullptr) binary = CONFLUENT_DEFAULT_BIN;
   CommandResult result;
   TempDir scratch;
-  std::string command = ShellQuote(binary);
+  std::string command = shell_prefix + " exec " + ShellQuote(binary);
   for (const auto& arg : args) command += " " + ShellQuote(arg);
   command += " </dev/null >" + scratch / "out" + " 2>" + scratch / "err";
   int status = std::system(command.c_str());

@@ -27,8 +27,9 @@ struct CommandResult {
   std::string stderr_text;
 };
 
-// Runs the `confluent` binary of this build (or $CONFLUENT_BIN) with `args`.
-CommandResult RunConfluent(const std::vector<std::string>& args);
+// Runs the `confluent` binary of this build (or $CONFLUENT_BIN) with `args`. `shell_prefix`
+// is run by the same shell just before it (e.g. "ulimit -f 100;" to simulate a full disk).
+CommandResult RunConfluent(const std::vector<std::string>& args, const std::string& shell_prefix = "");
 
 // Absolute path of ../shared/data/<relative>, or "" when it does not exist. Tests call
 // GTEST_SKIP() with a message when this is empty.

@@ -1,0 +1,344 @@
+// confluent evaluate CAPTURE --run RUN --heldout NAME...: silhouette overlap, image quality and
+// geometry of a run on cameras it never saw, with plots, side-by-side frames and report.html.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <optional>
+
+#include "app/commands.h"
+#include "app/frame_range.h"
+#include "app/plot.h"
+#include "app/run_folder.h"
+#include "app/run_report.h"
+#include "calib/capture.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/image_metrics.h"
+#include "core/mesh_io.h"
+#include "render/projective_texture.h"
+
+namespace confluent::app {
+namespace fs = std::filesystem;
+
+namespace {
+
+// The scores of one geometry (scan or template) in one held-out camera and frame.
+struct ViewScore {
+  double iou = NAN;
+  double xor_percent = NAN;  // |rendered XOR true| / |true|, %
+  double psnr_db = NAN;
+  double ssim = NAN;
+};
+
+struct Row {
+  std::string camera;
+  int frame = 0;
+  ViewScore scan, templ;
+  double vertex_error_m = NAN;  // scan vs ground-truth mesh (once per frame; repeated per camera)
+};
+
+ViewScore Score(const RenderResult& rendered, const Image& real, const Image& true_mask) {
+  ViewScore score;
+  std::size_t both = 0, either = 0, truth = 0;
+  for (std::size_t i = 0; i < true_mask.data.size(); ++i) {
+    const bool a = rendered.silhouette.data[i] != 0, b = true_mask.data[i] != 0;
+    both += a && b;
+    either += a || b;
+    truth += b;
+  }
+  score.iou = either ? static_cast<double>(both) / either : 1.0;
+  score.xor_percent = truth ? 100.0 * (either - both) / truth : NAN;
+  const Image region = UnionMask(rendered.silhouette, true_mask);
+  if (either > 0) {
+    score.psnr_db = MaskedPsnr(rendered.color, real, region);
+    score.ssim = MaskedSsim(rendered.color, real, region);
+  }
+  return score;
+}
+
+double Mean(const std::vector<double>& values) {
+  double sum = 0;
+  int n = 0;
+  for (double v : values)
+    if (std::isfinite(v)) sum += v, ++n;
+  return n ? sum / n : NAN;
+}
+
+double Min(const std::vector<double>& values) {
+  double best = NAN;
+  for (double v : values)
+    if (std::isfinite(v) && !(v >= best)) best = v;
+  return best;
+}
+
+nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+std::string Csv(double v) {
+  if (!std::isfinite(v)) return "";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", v);
+  return text;
+}
+
+// Mean vertex distance between two meshes of the same vertex count.
+double MeanVertexError(const Mesh& a, const Mesh& b) { return (a.vertices - b.vertices).rowwise().norm().mean(); }
+
+int RunEvaluate(const ParsedArgs& args, const Context& context) {
+  const std::string root = args.positionals()[0];
+  RunFolder run{args.get("run")};
+  if (!fs::is_directory(run.root)) throw InputError(run.root, "run folder not found");
+  CaptureOptions capture_options;
+  capture_options.check_every_image_header = false;
+  const Capture capture = Capture::Open(root, capture_options);
+  const Rig& rig = capture.rig();
+  const FrameRange range = ParseFrameRange(args.get("frames"), capture.num_frames());
+  const int every = args.get_int("every", 1);
+  if (every < 1) throw UsageError("--every: must be >= 1");
+  const int side_by_side_every = args.get_int("side-by-side-every", 10);
+
+  // Cameras: held out (scored) and the ones the run used (texturing).
+  std::vector<std::string> run_excluded;
+  if (fs::exists(run.Path("run.json"))) {
+    try {
+      run_excluded = nlohmann::json::parse(ReadTextFile(run.Path("run.json"))).value("excluded_cameras", run_excluded);
+    } catch (const nlohmann::json::exception& e) {
+      throw InputError(run.Path("run.json"), std::string("not a run.json: ") + e.what());
+    }
+  }
+  std::vector<int> heldout;
+  std::vector<std::string> warnings;
+  for (const std::string& name : args.get_all("heldout")) {
+    rig.Get(name);  // UsageError listing the known names
+    heldout.push_back(rig.IndexOf(name));
+    if (std::find(run_excluded.begin(), run_excluded.end(), name) == run_excluded.end())
+      warnings.push_back("camera " + name + " was not excluded from the run: its scores are not held-out scores");
+  }
+  std::vector<int> used;
+  std::vector<Camera> used_cameras;
+  for (int c = 0; c < rig.size(); ++c) {
+    const bool excluded = std::find(run_excluded.begin(), run_excluded.end(), rig.cameras[c].name) != run_excluded.end();
+    if (!excluded && std::find(heldout.begin(), heldout.end(), c) == heldout.end()) {
+      used.push_back(c);
+      used_cameras.push_back(rig.cameras[c]);
+    }
+  }
+  if (used.empty()) throw UsageError("no camera is left for texturing");
+  const std::string masks_dir = args.get("masks");
+  auto true_mask_path = [&](int camera, int frame) {
+    const std::string& name = rig.cameras[camera].name;
+    if (!masks_dir.empty()) return (fs::path(masks_dir) / name / (FrameStem(frame) + ".png")).string();
+    return run.MaskPath(name, frame);
+  };
+  const std::string gt_meshes = args.get("gt-meshes");
+
+  // Geometry present in the run.
+  const bool has_scan = fs::exists(run.ScanPath(range.first));
+  std::vector<int> frames, missing;
+  for (int frame = range.first; frame < range.end; frame += every) {
+    if (fs::exists(run.TemplatePath(frame))) frames.push_back(frame);
+    else missing.push_back(frame);
+  }
+  if (frames.empty()) throw InputError(run.root, "no tracked frame in range: run `confluent run` first");
+  if (!missing.empty()) warnings.push_back(std::to_string(missing.size()) + " frame(s) without geometry skipped, first " +
+                                           std::to_string(missing.front()));
+
+  std::optional<ProjectiveTexturer> scan_texturer, template_texturer;
+  Mesh scan_colours;
+  if (has_scan) {
+    const Mesh first = ReadMesh(run.ScanPath(range.first));
+    scan_texturer.emplace(first);
+  }
+  template_texturer.emplace(ReadMesh(run.TemplatePath(frames.front())));
+
+  fs::create_directories(run.Path("plots"));
+  std::vector<Row> rows;
+  std::vector<Image> error_sum(heldout.size());
+  std::vector<int> error_count(heldout.size(), 0);
+  const ProgressCallback progress = context.make_progress();
+  int done = 0;
+  for (int frame : frames) {
+    std::vector<Image> images, masks;
+    for (int c : used) {
+      images.push_back(capture.ReadFrame(c, frame));
+      const std::string mask = run.MaskPath(rig.cameras[c].name, frame);
+      masks.push_back(fs::exists(mask) ? ReadMaskFile(mask) : Image());
+    }
+    const Mesh templ = ReadMesh(run.TemplatePath(frame));
+    template_texturer->SetFrame(templ.vertices, used_cameras, images, masks);
+    std::optional<Mesh> scan;
+    double vertex_error = NAN;
+    if (has_scan && fs::exists(run.ScanPath(frame))) {
+      scan = ReadMesh(run.ScanPath(frame));
+      scan_texturer->SetFrame(scan->vertices, used_cameras, images, masks);
+      const fs::path gt = fs::path(gt_meshes) / (FrameStem(frame) + ".ply");
+      if (!gt_meshes.empty()) {
+        if (!fs::exists(gt)) throw InputError(gt.string(), "ground-truth mesh not found");
+        const Mesh truth = ReadMesh(gt.string());
+        if (truth.vertices.rows() != scan->vertices.rows())
+          throw InputError(gt.string(), "ground-truth mesh has " + std::to_string(truth.vertices.rows()) +
+                                            " vertices, the scan " + std::to_string(scan->vertices.rows()));
+        vertex_error = MeanVertexError(*scan, truth);
+      }
+    }
+    for (std::size_t h = 0; h < heldout.size(); ++h) {
+      const int c = heldout[h];
+      const Camera& camera = rig.cameras[c];
+      const Image real = capture.ReadFrame(c, frame);
+      const std::string mask_path = true_mask_path(c, frame);
+      if (!fs::exists(mask_path))
+        throw InputError(mask_path, "no silhouette for held-out camera " + camera.name + " (pass --masks DIR, or run the silhouettes stage)");
+      const Image truth = ReadMaskFile(mask_path);
+      Row row;
+      row.camera = camera.name;
+      row.frame = frame;
+      row.vertex_error_m = vertex_error;
+      const RenderResult rendered_template = template_texturer->Render(camera, true);
+      row.templ = Score(rendered_template, real, truth);
+      std::optional<RenderResult> rendered_scan;
+      if (scan) {
+        rendered_scan = scan_texturer->Render(camera, true);
+        row.scan = Score(*rendered_scan, real, truth);
+      }
+      const RenderResult& best = rendered_scan ? *rendered_scan : rendered_template;
+      const Image difference = AbsoluteDifference(best.color, real);
+      if (error_sum[h].empty()) error_sum[h] = Image(difference.width, difference.height, 1, PixelType::kFloat32);
+      for (std::size_t i = 0; i < difference.data.size() / 4; ++i)
+        error_sum[h].ptr<float>()[i] += difference.ptr<float>()[i];
+      ++error_count[h];
+      if (side_by_side_every > 0 && (frame - frames.front()) % (side_by_side_every * every) == 0) {
+        Image difference_rgb(difference.width, difference.height, 3);
+        for (std::size_t i = 0; i < difference.data.size() / 4; ++i) {
+          const auto v = static_cast<std::uint8_t>(std::min(255.0f, 4.0f * 255.0f * difference.ptr<float>()[i]));
+          difference_rgb.data[3 * i] = difference_rgb.data[3 * i + 1] = difference_rgb.data[3 * i + 2] = v;
+        }
+        std::vector<Image> panels = {real};
+        std::vector<std::string> captions = {camera.name + " real"};
+        if (rendered_scan) panels.push_back(rendered_scan->color), captions.push_back("scan");
+        panels.push_back(rendered_template.color), captions.push_back("template");
+        panels.push_back(difference_rgb), captions.push_back(std::string("|") + (rendered_scan ? "scan" : "template") + " - real| x4");
+        const std::string path = run.Path("evaluation/" + camera.name + "/" + FrameStem(frame) + ".png");
+        fs::create_directories(fs::path(path).parent_path());
+        WriteImage(path, SideBySide(panels, captions));
+      }
+      rows.push_back(row);
+    }
+    ReportProgress(progress, "evaluate", ++done, frames.size(), "frame " + std::to_string(frame));
+  }
+
+  // Tables, plots and the report.
+  auto column = [&](auto get) {
+    std::vector<double> values;
+    for (const Row& row : rows) values.push_back(get(row));
+    return values;
+  };
+  const std::vector<double> scan_iou = column([](const Row& r) { return r.scan.iou; });
+  const std::vector<double> template_iou = column([](const Row& r) { return r.templ.iou; });
+  const std::vector<double> scan_psnr = column([](const Row& r) { return r.scan.psnr_db; });
+  const std::vector<double> template_psnr = column([](const Row& r) { return r.templ.psnr_db; });
+  const std::vector<double> scan_ssim = column([](const Row& r) { return r.scan.ssim; });
+  const std::vector<double> template_ssim = column([](const Row& r) { return r.templ.ssim; });
+  const std::vector<double> scan_xor = column([](const Row& r) { return r.scan.xor_percent; });
+  const std::vector<double> template_xor = column([](const Row& r) { return r.templ.xor_percent; });
+  std::vector<double> vertex_errors;
+  for (std::size_t i = 0; i < rows.size(); i += heldout.size()) vertex_errors.push_back(rows[i].vertex_error_m);
+
+  EvaluationSummary summary;
+  summary.heldout = args.get_all("heldout");
+  summary.frames = static_cast<int>(frames.size());
+  summary.has_scan = has_scan;
+  summary.scan = {Mean(scan_iou), Min(scan_iou), Mean(scan_xor), Mean(scan_psnr), Mean(scan_ssim)};
+  summary.templ = {Mean(template_iou), Min(template_iou), Mean(template_xor), Mean(template_psnr), Mean(template_ssim)};
+  summary.vertex_error_mean_m = Mean(vertex_errors);
+  summary.warnings = warnings;
+
+  nlohmann::json json = summary.ToJson();
+  std::string csv = "camera,frame,scan_iou,scan_xor_percent,scan_psnr_db,scan_ssim,template_iou,template_xor_percent,"
+                    "template_psnr_db,template_ssim,scan_vertex_error_m\n";
+  for (const Row& r : rows) {
+    json["rows"].push_back({{"camera", r.camera}, {"frame", r.frame},
+                            {"scan", {{"iou", Number(r.scan.iou)}, {"xor_percent", Number(r.scan.xor_percent)},
+                                      {"psnr_db", Number(r.scan.psnr_db)}, {"ssim", Number(r.scan.ssim)}}},
+                            {"template", {{"iou", Number(r.templ.iou)}, {"xor_percent", Number(r.templ.xor_percent)},
+                                          {"psnr_db", Number(r.templ.psnr_db)}, {"ssim", Number(r.templ.ssim)}}},
+                            {"scan_vertex_error_m", Number(r.vertex_error_m)}});
+    csv += r.camera + "," + std::to_string(r.frame) + "," + Csv(r.scan.iou) + "," + Csv(r.scan.xor_percent) + "," +
+           Csv(r.scan.psnr_db) + "," + Csv(r.scan.ssim) + "," + Csv(r.templ.iou) + "," + Csv(r.templ.xor_percent) + "," +
+           Csv(r.templ.psnr_db) + "," + Csv(r.templ.ssim) + "," + Csv(r.vertex_error_m) + "\n";
+  }
+  WriteTextFile(run.Path("metrics.json"), json.dump(1) + "\n");
+  WriteTextFile(run.Path("metrics.csv"), csv);
+
+  // Per-frame plots: the mean over held-out cameras.
+  auto per_frame = [&](const std::vector<double>& values) {
+    PlotSeries series;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      std::vector<double> at_frame(values.begin() + i * heldout.size(), values.begin() + (i + 1) * heldout.size());
+      series.x.push_back(frames[i]);
+      series.y.push_back(Mean(at_frame));
+    }
+    return series;
+  };
+  auto coloured = [](PlotSeries s, const std::string& label, unsigned char r, unsigned char g, unsigned char b) {
+    s.label = label, s.r = r, s.g = g, s.b = b;
+    return s;
+  };
+  std::vector<PlotSeries> iou_series = {coloured(per_frame(template_iou), "template", 200, 90, 30)};
+  std::vector<PlotSeries> psnr_series = {coloured(per_frame(template_psnr), "template", 200, 90, 30)};
+  if (has_scan) {
+    iou_series.push_back(coloured(per_frame(scan_iou), "scan", 30, 90, 200));
+    psnr_series.push_back(coloured(per_frame(scan_psnr), "scan", 30, 90, 200));
+  }
+  WriteImage(run.Path("plots/iou_per_frame.png"), DrawLineChart(iou_series, "Held-out silhouette IoU", "frame", "IoU"));
+  WriteImage(run.Path("plots/psnr_per_frame.png"),
+             DrawLineChart(psnr_series, "Held-out PSNR inside the union of the masks", "frame", "dB"));
+  for (std::size_t h = 0; h < heldout.size(); ++h) {
+    Image mean = error_sum[h];
+    for (std::size_t i = 0; i < mean.data.size() / 4; ++i) mean.ptr<float>()[i] /= std::max(1, error_count[h]);
+    WriteImage(run.Path("plots/error_heatmap_" + rig.cameras[heldout[h]].name + ".png"),
+               DrawHeatMap(mean, 0.25, "mean |rendered - real| over frames, " + rig.cameras[heldout[h]].name));
+  }
+  WriteTextFile(run.Path("report.html"), ReportHtml(run, summary, rig, heldout));
+
+  std::printf("%s", SummaryTable(summary).c_str());
+  for (const std::string& warning : warnings) std::fprintf(stderr, "confluent evaluate: warning: %s\n", warning.c_str());
+  std::printf("metrics: %s, plots: %s, report: %s\n", run.Path("metrics.json").c_str(), run.Path("plots").c_str(),
+              run.Path("report.html").c_str());
+  return 0;
+}
+
+}  // namespace
+
+CommandSpec MakeEvaluateCommand() {
+  CommandSpec spec;
+  spec.name = "evaluate";
+  spec.summary = "score a run on held-out cameras: silhouette IoU/XOR, PSNR/SSIM, vertex error, report.html";
+  spec.usage = "CAPTURE --run RUN --heldout NAME... [--masks DIR] [--gt-meshes DIR]";
+  spec.description =
+      "For each held-out camera and frame, renders the run's animated scan and its template, projectively\n"
+      "textured from the cameras the run used, into the held-out camera and compares with the real image:\n"
+      "silhouette IoU and XOR error (% of the true silhouette area), and PSNR/SSIM computed inside the union\n"
+      "of the true and the rendered silhouette (pixels outside both are background in both and are not\n"
+      "counted). True silhouettes come from --masks DIR, else from the run's extracted masks (RUN/masks).\n"
+      "With --gt-meshes DIR (meshes with the scan's topology, DIR/<frame>.ply) the scan's mean vertex error\n"
+      "is reported. Writes RUN/metrics.json, metrics.csv, plots/*.png (per-frame metrics, error heat maps),\n"
+      "evaluation/<cam>/<frame>.png (real | scan | template | difference) and report.html.";
+  spec.min_positionals = spec.max_positionals = 1;
+  spec.options = {
+      {"run", "RUN", "the run folder", false, true},
+      {"heldout", "NAME", "held-out camera to score; repeatable", true, true},
+      {"masks", "DIR", "true silhouettes DIR/<cam>/<frame>.png (default: the run's masks)"},
+      {"gt-meshes", "DIR", "ground-truth meshes DIR/<frame>.ply with the scan's topology: vertex error"},
+      {"frames", "A:B", "frame range, B exclusive (default: all)"},
+      {"every", "N", "score every N-th frame (default 1)"},
+      {"side-by-side-every", "N", "write side-by-side pictures every N scored frames (default 10; 0 = none)"},
+  };
+  spec.run = RunEvaluate;
+  return spec;
+}
+
+}  // namespace confluent::app

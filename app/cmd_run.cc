@@ -1,0 +1,201 @@
+// confluent run CAPTURE [--scan S] [--correspondences C] [--exclude-camera NAME]... [--frames A:B]
+// --out RUN: capture to 3D video, every stage resumable.
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "app/commands.h"
+#include "app/run_stages.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/mesh_io.h"
+#include "core/mesh_validation.h"
+
+namespace confluent::app {
+namespace fs = std::filesystem;
+
+namespace {
+
+// FNV-1a 64-bit checksum of a file's bytes, as 16 hex digits ("" when the path is empty).
+std::string FileChecksum(const std::string& path) {
+  if (path.empty()) return "";
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot be read");
+  std::uint64_t hash = 1469598103934665603ull;
+  char buffer[1 << 16];
+  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+    for (std::streamsize i = 0; i < in.gcount(); ++i) hash = (hash ^ static_cast<unsigned char>(buffer[i])) * 1099511628211ull;
+    if (!in) break;
+  }
+  char text[20];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(hash));
+  return text;
+}
+
+// The identity of the inputs: a resumed run must have the same.
+nlohmann::json InputChecksums(const Capture& capture, const RunInputs& inputs) {
+  nlohmann::json json;
+  json["intri.yml"] = FileChecksum((fs::path(capture.root()) / "intri.yml").string());
+  json["extri.yml"] = FileChecksum((fs::path(capture.root()) / "extri.yml").string());
+  json["scan"] = FileChecksum(inputs.scan_path);
+  json["correspondences"] = FileChecksum(inputs.correspondences_path);
+  json["frames"] = capture.num_frames();
+  json["cameras"] = capture.rig().names();
+  return json;
+}
+
+// Writes run.json, or checks that an existing one describes the same inputs.
+void RecordRun(const RunInputs& inputs, const ParsedArgs& args, const nlohmann::json& checksums,
+               const std::vector<std::string>& excluded_names) {
+  const std::string path = inputs.folder.Path("run.json");
+  if (fs::exists(path)) {
+    nlohmann::json previous;
+    try {
+      previous = nlohmann::json::parse(ReadTextFile(path));
+    } catch (const nlohmann::json::exception& e) {
+      throw InputError(path, std::string("not a run.json: ") + e.what());
+    }
+    if (previous.value("input_checksums", nlohmann::json()) != checksums)
+      throw InputError(path, "this run folder was made from other inputs (calibration, scan or correspondences differ); "
+                             "use a new --out folder");
+    if (previous.value("excluded_cameras", std::vector<std::string>{}) != excluded_names)
+      throw InputError(path, "this run folder was made with other --exclude-camera names; use a new --out folder");
+    return;
+  }
+  nlohmann::json json;
+  json["format"] = "confluent.run/1";
+  json["version"] = CONFLUENT_VERSION;
+  json["capture"] = fs::absolute(inputs.capture->root()).string();
+  json["scan"] = inputs.scan_path.empty() ? "" : fs::absolute(inputs.scan_path).string();
+  json["correspondences"] = inputs.correspondences_path.empty() ? "automatic" : fs::absolute(inputs.correspondences_path).string();
+  json["masks"] = inputs.masks_dir.empty() ? "extracted" : fs::absolute(inputs.masks_dir).string();
+  json["excluded_cameras"] = excluded_names;
+  json["frames"] = {inputs.frames.first, inputs.frames.end};
+  nlohmann::json options;
+  for (const auto& [name, values] : args.values_) options[name] = values;
+  json["options"] = options;
+  json["input_checksums"] = checksums;
+  WriteTextFile(path, json.dump(1) + "\n");
+}
+
+// Refuses, before any work, a scan the deformation cannot animate well: unreadable, non-finite,
+// non-manifold or (unless allowed) with holes.
+void CheckScan(const std::string& path, bool allow_open) {
+  if (!fs::exists(path)) throw InputError(path, "scan not found");
+  const MeshReport report = ValidateMesh(ReadMesh(path));
+  if (report.num_faces == 0) throw InputError(path, "the scan has no faces");
+  if (!report.invalid_vertices.empty())
+    throw InputError(path, std::to_string(report.invalid_vertices.size()) + " vertices with NaN or infinite coordinates");
+  if (!report.is_manifold())
+    throw InputError(path, "the scan is not manifold (" + std::to_string(report.non_manifold_edges.size()) +
+                               " edges shared by more than 2 faces, " + std::to_string(report.non_manifold_vertices.size()) +
+                               " non-manifold vertices); repair it, e.g. in MeshLab");
+  if (!allow_open && report.num_boundary_edges > 0)
+    throw InputError(path, "the scan is not watertight (" + std::to_string(report.num_boundary_edges) + " boundary edges in " +
+                               std::to_string(report.num_boundary_loops) +
+                               " holes); close the holes, or pass --allow-open-scan to animate it anyway");
+}
+
+void PrintReport(const StageReport& report) {
+  std::printf("%-16s %6d computed %6d already done %9.1f s\n", report.stage.c_str(), report.computed, report.skipped,
+              report.seconds);
+  const std::size_t shown = std::min<std::size_t>(report.notes.size(), 8);
+  for (std::size_t i = 0; i < shown; ++i) std::printf("    %s\n", report.notes[i].c_str());
+  if (report.notes.size() > shown) std::printf("    ... %zu more\n", report.notes.size() - shown);
+  std::fflush(stdout);
+}
+
+int RunRun(const ParsedArgs& args, const Context& context) {
+  const std::string root = args.positionals()[0];
+  CaptureOptions capture_options;
+  capture_options.check_every_image_header = false;
+  const Capture capture = Capture::Open(root, capture_options);
+  const Rig& rig = capture.rig();
+
+  RunInputs inputs;
+  inputs.capture = &capture;
+  inputs.folder.root = args.get("out");
+  inputs.frames = ParseFrameRange(args.get("frames"), capture.num_frames());
+  inputs.excluded.assign(rig.size(), false);
+  std::vector<std::string> excluded_names = args.get_all("exclude-camera");
+  for (const std::string& name : excluded_names) {
+    rig.Get(name);  // throws UsageError listing the known names
+    inputs.excluded[rig.IndexOf(name)] = true;
+  }
+  std::sort(excluded_names.begin(), excluded_names.end());
+  if (std::count(inputs.excluded.begin(), inputs.excluded.end(), false) < 2)
+    throw UsageError("--exclude-camera: at least 2 cameras must remain for tracking");
+  inputs.masks_dir = args.get("masks");
+  if (!inputs.masks_dir.empty() && !fs::is_directory(inputs.masks_dir)) throw InputError(inputs.masks_dir, "masks folder not found");
+  inputs.scan_path = args.has("no-scan") ? "" : args.get("scan", capture.scan_path());
+  if (!inputs.scan_path.empty()) CheckScan(inputs.scan_path, args.has("allow-open-scan"));
+  inputs.correspondences_path = args.get("correspondences", capture.correspondences_path());
+  if (!inputs.correspondences_path.empty() && !fs::exists(inputs.correspondences_path))
+    throw InputError(inputs.correspondences_path, "correspondences file not found");
+  inputs.threads = args.get_int("threads", 2);
+  if (inputs.threads < 1 || inputs.threads > 64) throw UsageError("--threads: must be within [1, 64]");
+  RenderStageOptions render;
+  render.width = args.get_int("render-width", render.width);
+  render.height = args.get_int("render-height", render.height);
+  if (render.width < 16 || render.height < 16 || render.width > 8192 || render.height > 8192)
+    throw UsageError("--render-width/--render-height: must be within [16, 8192]");
+
+  fs::create_directories(inputs.folder.root);
+  RecordRun(inputs, args, InputChecksums(capture, inputs), excluded_names);
+  TimingLog timings(inputs.folder.Path("timings.csv"));
+  std::printf("run %s: %d cameras (%zu held out), frames %d:%d, %s\n", inputs.folder.root.c_str(), rig.size(),
+              excluded_names.size(), inputs.frames.first, inputs.frames.end,
+              inputs.scan_path.empty() ? "no scan (template 3D video)" : ("scan " + inputs.scan_path).c_str());
+  std::fflush(stdout);
+
+  const BodyTemplate body;
+  PrintReport(RunSilhouetteStage(inputs, context.make_progress(), &timings));
+  BodyShape shape;
+  PrintReport(RunTrackingStage(inputs, body, context.make_progress(), &timings, &shape));
+  if (!inputs.scan_path.empty()) {
+    PrintReport(RunCorrespondenceStage(inputs, body, shape, &timings));
+    PrintReport(RunDeformStage(inputs, context.make_progress(), &timings));
+  }
+  if (!args.has("no-render")) PrintReport(RunRenderStage(inputs, render, context.make_progress(), &timings));
+  std::printf("done: %s (timings in %s)\n", inputs.folder.root.c_str(), inputs.folder.Path("timings.csv").c_str());
+  return 0;
+}
+
+}  // namespace
+
+CommandSpec MakeRunCommand() {
+  CommandSpec spec;
+  spec.name = "run";
+  spec.summary = "capture to 3D video: silhouettes, tracking, correspondences, deformation, renders (resumable)";
+  spec.usage = "CAPTURE [--scan S] [--correspondences C] [--exclude-camera NAME]... [--frames A:B] --out RUN";
+  spec.description =
+      "Stages, in order: silhouettes (RUN/masks), marker-less tracking (RUN/tracking, RUN/template, poses.json,\n"
+      "motion.bvh), registration of the template to the scan and correspondences (RUN/correspondences.json,\n"
+      "automatic unless given), Confluent Motion (RUN/scan/<frame>.ply) and the 3D video: an orbit around the\n"
+      "actor, projectively textured from the used cameras (RUN/renders/orbit/<frame>.png, orbit.mp4).\n"
+      "Without a scan (none given and none in the capture), the 3D video uses the tracked template.\n"
+      "Resumable: every file is written atomically and a re-run skips finished frames. --frames A:B makes\n"
+      "independent shards; tracking continues from the state of frame A-1 when a previous shard wrote it.\n"
+      "Writes run.json (options, input checksums, version) and timings.csv (seconds per stage and frame).";
+  spec.min_positionals = spec.max_positionals = 1;
+  spec.options = {
+      {"out", "RUN", "output folder", false, true},
+      {"scan", "FILE", "the actor's scan (default CAPTURE/scan.ply|obj when present)"},
+      {"no-scan", "", "ignore any scan: the 3D video uses the template"},
+      {"allow-open-scan", "", "accept a scan with holes (boundary edges)"},
+      {"correspondences", "FILE", "template<->scan correspondences (default: automatic)"},
+      {"exclude-camera", "NAME", "do not use this camera (held out for evaluation); repeatable", true},
+      {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
+      {"masks", "DIR", "use these masks DIR/<cam>/<frame>.png instead of extracting silhouettes"},
+      {"no-render", "", "skip the 3D-video render stage"},
+      {"render-width", "PX", "width of the orbit video (default 960)"},
+      {"render-height", "PX", "height of the orbit video (default 720)"},
+      {"threads", "N", "worker threads (default 2)"},
+  };
+  spec.run = RunRun;
+  return spec;
+}
+
+}  // namespace confluent::app

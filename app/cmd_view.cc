@@ -1,0 +1,777 @@
+// confluent view RUN: an interactive GLFW viewer of a run's 3D video (animated scan, or the
+// posed template), with projective texturing from the capture, camera frusta, blend weights,
+// a timeline and screenshots.
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/commands.h"
+#include "app/frame_range.h"
+#include "app/viewer_run.h"
+#include "calib/capture.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/mesh_ops.h"
+#include "render/projective_texture.h"
+#include "render/renderer.h"
+#include "render/viewer_scene.h"
+
+namespace confluent::app {
+namespace {
+namespace fs = std::filesystem;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kVerticalFovDeg = 40.0;  // of the viewer camera
+constexpr int kTimelineHeightPx = 22;     // the timeline bar at the bottom of the window
+
+enum class Mode { kTextured, kShaded, kWireframe, kWeights };
+
+const char* ModeName(Mode mode) {
+  switch (mode) {
+    case Mode::kTextured: return "textured";
+    case Mode::kShaded: return "shaded";
+    case Mode::kWireframe: return "wireframe";
+    case Mode::kWeights: return "blend weights";
+  }
+  return "";
+}
+
+Mode ParseMode(const std::string& text) {
+  if (text == "textured") return Mode::kTextured;
+  if (text == "shaded") return Mode::kShaded;
+  if (text == "wireframe") return Mode::kWireframe;
+  if (text == "weights") return Mode::kWeights;
+  throw UsageError("--mode: expected textured, shaded, wireframe or weights, got '" + text + "'");
+}
+
+// Distinct colours for the input cameras (frusta and blend weights).
+Eigen::Vector3d CameraColor(int index) {
+  static const double kPalette[][3] = {{0.90, 0.30, 0.25}, {0.25, 0.70, 0.30}, {0.25, 0.45, 0.90}, {0.95, 0.75, 0.20},
+                                       {0.70, 0.35, 0.85}, {0.20, 0.80, 0.80}, {0.95, 0.50, 0.75}, {0.60, 0.45, 0.25},
+                                       {0.55, 0.85, 0.30}, {0.35, 0.35, 0.65}};
+  const auto& c = kPalette[index % 10];
+  return {c[0], c[1], c[2]};
+}
+
+// The orbiting viewer camera: spherical coordinates around a target point.
+struct Orbit {
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();
+  double distance_m = 3.0;
+  double azimuth_deg = -90.0;  // 0 = camera on +x, -90 = camera on -y (in front)
+  double elevation_deg = 15.0;
+
+  Camera View(int width_px, int height_px) const {
+    const double az = azimuth_deg * kPi / 180.0, el = elevation_deg * kPi / 180.0;
+    const Eigen::Vector3d center =
+        target + distance_m * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+    const double focal_px = 0.5 * height_px / std::tan(0.5 * kVerticalFovDeg * kPi / 180.0);
+    return LookAtCamera("view", center, target, width_px, height_px, focal_px);
+  }
+};
+
+// The initial view: looks at the centre of `mesh`'s bounding box from the front (-y), 15 degrees
+// above, from where the bounding sphere fills the vertical field of view with a margin.
+Orbit InitialOrbit(const Mesh& mesh) {
+  const Eigen::AlignedBox3d box = BoundingBox(mesh);
+  Orbit orbit;
+  orbit.target = box.center();
+  const double radius = std::max(0.5 * box.diagonal().norm(), 1e-3);
+  orbit.distance_m = 1.2 * radius / std::sin(0.5 * kVerticalFovDeg * kPi / 180.0);
+  return orbit;
+}
+
+// A camera with its image scaled by `scale` (pixel centres kept consistent).
+Camera ScaledCamera(const Camera& camera, double scale) {
+  Camera scaled = camera;
+  scaled.width = std::max(1, static_cast<int>(std::lround(camera.width * scale)));
+  scaled.height = std::max(1, static_cast<int>(std::lround(camera.height * scale)));
+  const double sx = static_cast<double>(scaled.width) / camera.width;
+  const double sy = static_cast<double>(scaled.height) / camera.height;
+  scaled.K(0, 0) *= sx;
+  scaled.K(0, 1) *= sx;
+  scaled.K(1, 1) *= sy;
+  scaled.K(0, 2) = (camera.K(0, 2) + 0.5) * sx - 0.5;
+  scaled.K(1, 2) = (camera.K(1, 2) + 0.5) * sy - 0.5;
+  return scaled;
+}
+
+// Lets offscreen EGL work run on this thread: releases the window's (GLX) context, and on exit
+// releases EGL and makes the window's context current again (libglvnd allows one API per thread).
+class OffscreenScope {
+ public:
+  explicit OffscreenScope(GLFWwindow* window) : window_(window) { glfwMakeContextCurrent(nullptr); }
+  ~OffscreenScope() {
+    ReleaseCurrentEglContext();
+    glfwMakeContextCurrent(window_);
+  }
+  OffscreenScope(const OffscreenScope&) = delete;
+  OffscreenScope& operator=(const OffscreenScope&) = delete;
+
+ private:
+  GLFWwindow* window_;
+};
+
+// The capture behind the run: cameras used for texturing, frames, masks.
+struct CaptureState {
+  std::optional<Capture> capture;
+  std::vector<int> used;  // indices into the rig of the cameras used for texturing
+  std::string error;      // why there is no capture
+};
+
+CaptureState OpenCaptureFor(const ViewerRun& run) {
+  CaptureState state;
+  if (run.capture.empty()) {
+    state.error = "no capture (run.json names none; give --capture)";
+    return state;
+  }
+  try {
+    CaptureOptions options;
+    options.check_every_image_header = false;
+    state.capture = Capture::Open(run.capture, options);
+    const Rig& rig = state.capture->rig();
+    for (int i = 0; i < rig.size(); ++i)
+      if (std::find(run.excluded_cameras.begin(), run.excluded_cameras.end(), rig.cameras[i].name) ==
+          run.excluded_cameras.end())
+        state.used.push_back(i);
+  } catch (const std::exception& e) {
+    state.capture.reset();
+    state.error = std::string("capture unavailable: ") + e.what();
+  }
+  return state;
+}
+
+// Everything the window shows and the input handlers change.
+struct Viewer {
+  const ViewerRun* run = nullptr;
+  FrameCache* frames = nullptr;
+  CaptureState* capture = nullptr;
+  GLFWwindow* window = nullptr;
+  std::unique_ptr<ViewerScene> scene;
+
+  int frame = 0;
+  Mode mode = Mode::kShaded;
+  bool show_frusta = false;
+  bool playing = false;
+  double fps = 25.0;
+  Orbit orbit;
+  Eigen::Vector3d background = Eigen::Vector3d(0.12, 0.12, 0.14);
+
+  // Mouse state.
+  bool rotating = false, zooming = false, scrubbing = false;
+  double last_x = 0.0, last_y = 0.0;
+
+  // What the GPU holds.
+  int uploaded_frame = -1;
+  bool uploaded_weights = false;
+  bool frusta_uploaded = false;
+  std::shared_ptr<const Mesh> mesh;  // the current frame's mesh (null when missing)
+  std::string frame_error;
+  std::string note;                  // why the mode fell back (set by every Draw), in the title
+  std::string message;               // last key action's result (saved screenshot), in the title
+  bool dirty = true;
+  int drawn_frames = 0;
+
+  // Offscreen texturing and visibility (EGL), created on first use.
+  std::unique_ptr<ProjectiveTexturer> texturer;
+  int texturer_vertices = -1;
+  int texturer_frame = -1;
+  std::string texture_error;
+  std::unique_ptr<MeshRenderer> depth_renderer;
+  int depth_frame = -1;
+  std::vector<Camera> depth_cameras;  // used cameras at reduced resolution
+  std::vector<Image> depth_maps;
+
+  void SetFrame(int new_frame) {
+    new_frame = std::clamp(new_frame, run->first_frame, run->last_frame);
+    if (new_frame != frame) {
+      frame = new_frame;
+      dirty = true;
+    }
+  }
+  void Step(int delta) {
+    const int n = run->num_frames();
+    SetFrame(run->first_frame + ((frame - run->first_frame + delta) % n + n) % n);
+  }
+};
+
+Viewer* GetViewer(GLFWwindow* window) { return static_cast<Viewer*>(glfwGetWindowUserPointer(window)); }
+
+// Frame under window x (in framebuffer pixels) on the timeline.
+int TimelineFrame(const Viewer& viewer, double x, int width_px) {
+  const double t = std::clamp(x / std::max(1, width_px), 0.0, 1.0);
+  const int n = viewer.run->num_frames();
+  return viewer.run->first_frame + std::min(n - 1, static_cast<int>(t * n));
+}
+
+// Cursor position in framebuffer pixels.
+void CursorInFramebuffer(GLFWwindow* window, double* x, double* y) {
+  int window_w = 1, window_h = 1, fb_w = 1, fb_h = 1;
+  glfwGetWindowSize(window, &window_w, &window_h);
+  glfwGetFramebufferSize(window, &fb_w, &fb_h);
+  glfwGetCursorPos(window, x, y);
+  *x *= static_cast<double>(fb_w) / std::max(1, window_w);
+  *y *= static_cast<double>(fb_h) / std::max(1, window_h);
+}
+
+// Loads the current frame's mesh and uploads it (and its colours) when it changed.
+void UpdateGeometry(Viewer& viewer) {
+  if (viewer.uploaded_frame == viewer.frame) return;
+  viewer.mesh = viewer.frames->Get(viewer.frame, &viewer.frame_error);
+  if (viewer.mesh) viewer.scene->SetMesh(*viewer.mesh);
+  viewer.uploaded_frame = viewer.frame;
+  viewer.uploaded_weights = false;
+}
+
+// Lines of the capture cameras' frusta, each drawn to a fifth of the camera's distance to
+// `target_in_world`: used cameras in their colour, excluded ones grey.
+std::vector<ViewerLine> FrustumLines(const CaptureState& capture, const Eigen::Vector3d& target_in_world) {
+  std::vector<ViewerLine> lines;
+  if (!capture.capture) return lines;
+  const Rig& rig = capture.capture->rig();
+  for (int i = 0; i < rig.size(); ++i) {
+    const Camera& camera = rig.cameras[i];
+    const auto used = std::find(capture.used.begin(), capture.used.end(), i);
+    const Eigen::Vector3d color = used == capture.used.end()
+                                      ? Eigen::Vector3d(0.55, 0.55, 0.55)
+                                      : CameraColor(static_cast<int>(used - capture.used.begin()));
+    const Eigen::Vector3d center = camera.center_in_world();
+    const double depth_m = std::max(0.05, 0.2 * (target_in_world - center).norm());
+    const double w = camera.width - 0.5, h = camera.height - 0.5;
+    const Eigen::Vector2d pixels[4] = {{-0.5, -0.5}, {w, -0.5}, {w, h}, {-0.5, h}};
+    Eigen::Vector3d corners[4];
+    for (int k = 0; k < 4; ++k) corners[k] = camera.Unproject(pixels[k], depth_m);
+    for (int k = 0; k < 4; ++k) {
+      lines.push_back({center, corners[k], color});
+      lines.push_back({corners[k], corners[(k + 1) % 4], color});
+    }
+    // A tick on the top edge shows which way is up in the image.
+    const Eigen::Vector3d top = camera.Unproject(Eigen::Vector2d(0.5 * w, -0.25 * h), depth_m);
+    lines.push_back({corners[0] + 0.25 * (corners[1] - corners[0]), top, color});
+    lines.push_back({corners[0] + 0.75 * (corners[1] - corners[0]), top, color});
+  }
+  return lines;
+}
+
+// Per-vertex colour of the input camera with the largest blend weight for `view`: among the
+// cameras that see the vertex (depth test against a depth map, facing the camera, inside the
+// image), the one whose ray is closest in angle to the view ray (Buehler et al. 2001). Dark grey
+// where no camera sees the vertex. Needs the capture; throws on GL failures.
+RowMatrixX3f DominantCameraColors(Viewer& viewer, const Camera& view) {
+  const Mesh& mesh = *viewer.mesh;
+  const CaptureState& capture = *viewer.capture;
+  if (viewer.depth_frame != viewer.frame) {
+    OffscreenScope offscreen(viewer.window);
+    if (!viewer.depth_renderer) {
+      viewer.depth_renderer = std::make_unique<MeshRenderer>();
+      viewer.depth_renderer->AddMesh(mesh, viewer.run->FramePath(viewer.frame));
+    } else {
+      viewer.depth_renderer->UpdateVertices(0, mesh.vertices);
+    }
+    viewer.depth_cameras.clear();
+    viewer.depth_maps.clear();
+    RenderRequest request;
+    request.color = false;
+    request.depth = true;
+    for (int index : capture.used) {
+      const Camera& camera = capture.capture->rig().cameras[index];
+      const double scale = std::min(1.0, 320.0 / std::max(camera.width, camera.height));
+      viewer.depth_cameras.push_back(ScaledCamera(camera, scale));
+      viewer.depth_maps.push_back(viewer.depth_renderer->Render(viewer.depth_cameras.back(), request).depth);
+    }
+    viewer.depth_frame = viewer.frame;
+  }
+  const RowMatrixX3d normals = VertexNormals(mesh);
+  const Eigen::Vector3d view_center = view.center_in_world();
+  RowMatrixX3f colors(mesh.num_vertices(), 3);
+  constexpr double kDepthBias = 0.03;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const Eigen::Vector3d point = mesh.vertices.row(v).transpose();
+    const Eigen::Vector3d to_view = (view_center - point).normalized();
+    int best = -1;
+    double best_angle = 1e9;
+    for (std::size_t c = 0; c < viewer.depth_cameras.size(); ++c) {
+      const Camera& camera = viewer.depth_cameras[c];
+      const Eigen::Vector3d to_camera = (camera.center_in_world() - point).normalized();
+      if (normals.row(v).dot(to_camera) <= 0.0) continue;
+      Eigen::Vector2d pixel;
+      if (!camera.ProjectChecked(point, &pixel)) continue;
+      const int x = static_cast<int>(std::lround(pixel.x())), y = static_cast<int>(std::lround(pixel.y()));
+      if (x < 0 || y < 0 || x >= camera.width || y >= camera.height) continue;
+      const float depth = viewer.depth_maps[c].at<float>(x, y);
+      if (depth <= 0.0f || camera.PointInCamera(point).z() > depth + kDepthBias) continue;
+      const double angle = std::acos(std::clamp(to_view.dot(to_camera), -1.0, 1.0));
+      if (angle < best_angle) {
+        best_angle = angle;
+        best = static_cast<int>(c);
+      }
+    }
+    const Eigen::Vector3d color = best < 0 ? Eigen::Vector3d(0.2, 0.2, 0.2) : CameraColor(best);
+    colors.row(v) = color.cast<float>().transpose();
+  }
+  return colors;
+}
+
+// Renders the textured view offscreen (ProjectiveTexturer) and returns it; empty on failure
+// (viewer.texture_error says why).
+Image TexturedView(Viewer& viewer, const Camera& view) {
+  const CaptureState& capture = *viewer.capture;
+  const Mesh& mesh = *viewer.mesh;
+  OffscreenScope offscreen(viewer.window);
+  try {
+    if (!viewer.texturer || viewer.texturer_vertices != mesh.num_vertices()) {
+      ProjectiveTextureOptions options;
+      options.background = viewer.background;
+      viewer.texturer = std::make_unique<ProjectiveTexturer>(mesh, options);
+      viewer.texturer_vertices = mesh.num_vertices();
+      viewer.texturer_frame = -1;
+    }
+    if (viewer.texturer_frame != viewer.frame) {
+      if (viewer.frame >= capture.capture->num_frames())
+        throw InputError(capture.capture->root(), "the capture has no frame " + std::to_string(viewer.frame));
+      std::vector<Camera> cameras;
+      std::vector<Image> images, masks;
+      const fs::path run_masks = fs::path(viewer.run->root) / "masks";
+      bool any_mask = false;
+      for (int index : capture.used) {
+        const Camera& camera = capture.capture->rig().cameras[index];
+        cameras.push_back(camera);
+        images.push_back(capture.capture->ReadFrame(index, viewer.frame));
+        const fs::path mask_path = run_masks / camera.name / (FrameStem(viewer.frame) + ".png");
+        Image mask;
+        if (fs::exists(mask_path)) {
+          mask = ReadMaskFile(mask_path.string());
+        } else if (capture.capture->has_masks()) {
+          mask = capture.capture->ReadMask(index, viewer.frame);
+        }
+        any_mask = any_mask || !mask.empty();
+        masks.push_back(std::move(mask));
+      }
+      if (!any_mask) masks.clear();
+      viewer.texturer->SetFrame(mesh.vertices, cameras, images, masks);
+      viewer.texturer_frame = viewer.frame;
+    }
+    viewer.texture_error.clear();
+    return viewer.texturer->Render(view).color;
+  } catch (const std::exception& e) {
+    viewer.texture_error = e.what();
+    viewer.texturer_frame = -1;
+    return {};
+  }
+}
+
+// Draws the current state into the window's back buffer.
+void Draw(Viewer& viewer, bool with_timeline) {
+  int width = 1, height = 1;
+  glfwGetFramebufferSize(viewer.window, &width, &height);
+  width = std::max(width, 1);
+  height = std::max(height, 1);
+  UpdateGeometry(viewer);
+  const Camera view = viewer.orbit.View(width, height);
+  ViewerMeshOptions options;
+  options.near_m = std::max(0.005, 0.01 * viewer.orbit.distance_m);
+  options.far_m = 100.0 * viewer.orbit.distance_m + 100.0;
+  viewer.note.clear();
+
+  Mode mode = viewer.mode;
+  if ((mode == Mode::kTextured || mode == Mode::kWeights) && !viewer.capture->capture) {
+    viewer.note = std::string(ModeName(mode)) + " needs the capture: " + viewer.capture->error;
+    mode = Mode::kShaded;
+  }
+  Image textured;
+  if (viewer.mesh && mode == Mode::kTextured) {
+    textured = TexturedView(viewer, view);
+    if (textured.empty()) {
+      viewer.note = "texturing failed: " + viewer.texture_error;
+      mode = Mode::kShaded;
+    }
+  }
+  if (viewer.mesh && mode == Mode::kWeights) {
+    try {
+      RowMatrixX3f colors = DominantCameraColors(viewer, view);
+      viewer.scene->SetMeshColors(colors);
+      viewer.uploaded_weights = true;
+    } catch (const std::exception& e) {
+      viewer.note = std::string("blend weights failed: ") + e.what();
+      mode = Mode::kShaded;
+    }
+  }
+  if (mode != Mode::kWeights && viewer.uploaded_weights) {
+    viewer.scene->SetMeshColors({});
+    viewer.uploaded_weights = false;
+  }
+
+  viewer.scene->Clear(width, height, viewer.background);
+  if (viewer.mesh) {
+    if (mode == Mode::kTextured) {
+      viewer.scene->SetImage(textured);
+      viewer.scene->DrawImage();
+    } else {
+      options.style = mode == Mode::kWireframe ? ViewerMeshStyle::kWireframe
+                      : mode == Mode::kWeights ? ViewerMeshStyle::kFlat
+                                               : ViewerMeshStyle::kShaded;
+      viewer.scene->DrawMesh(view, options);
+    }
+  }
+  if (viewer.show_frusta && !viewer.frusta_uploaded) {
+    viewer.scene->SetLines(FrustumLines(*viewer.capture, viewer.orbit.target));
+    viewer.frusta_uploaded = true;
+  }
+  if (viewer.show_frusta) viewer.scene->DrawLines(view, options);
+  if (with_timeline) {
+    std::vector<ViewerRect> rects;
+    const double y0 = height - kTimelineHeightPx, y1 = height;
+    rects.push_back({0.0, y0, double(width), y1, Eigen::Vector4d(0.0, 0.0, 0.0, 0.6)});
+    const int n = viewer.run->num_frames();
+    const double slot = static_cast<double>(width) / n;
+    const double played = (viewer.frame - viewer.run->first_frame + 1) * slot;
+    rects.push_back({0.0, y0 + 8, played, y1 - 8, Eigen::Vector4d(0.3, 0.55, 0.9, 0.9)});
+    for (int f = viewer.run->first_frame; f <= viewer.run->last_frame; ++f)
+      if (!viewer.run->has_frame(f)) {
+        const double x = (f - viewer.run->first_frame) * slot;
+        rects.push_back({x, y0 + 4, x + std::max(1.0, slot), y1 - 4, Eigen::Vector4d(0.9, 0.2, 0.2, 0.9)});
+      }
+    const double cursor = (viewer.frame - viewer.run->first_frame + 0.5) * slot;
+    rects.push_back({cursor - 2.0, y0 + 2, cursor + 2.0, y1 - 2, Eigen::Vector4d(1.0, 1.0, 1.0, 1.0)});
+    viewer.scene->DrawRects(rects, width, height);
+  }
+}
+
+void UpdateTitle(Viewer& viewer) {
+  std::string title = "confluent view " + fs::path(viewer.run->root).filename().string() + " - " +
+                      viewer.run->mesh_kind + " frame " + std::to_string(viewer.frame) + " of " +
+                      std::to_string(viewer.run->first_frame) + ".." + std::to_string(viewer.run->last_frame) + " - " +
+                      ModeName(viewer.mode) + (viewer.playing ? " - playing" : "");
+  if (!viewer.frame_error.empty()) title += " - " + viewer.frame_error;
+  if (!viewer.note.empty()) title += " - " + viewer.note;
+  if (!viewer.message.empty()) title += " - " + viewer.message;
+  glfwSetWindowTitle(viewer.window, title.c_str());
+}
+
+// A file name in the working folder that does not exist yet.
+std::string ScreenshotName(int frame) {
+  for (int i = 0;; ++i) {
+    const std::string name =
+        "confluent-view-" + FrameStem(frame) + (i == 0 ? std::string() : "-" + std::to_string(i)) + ".png";
+    if (!fs::exists(name)) return name;
+  }
+}
+
+void SaveScreenshot(Viewer& viewer, const std::string& path) {
+  int width = 1, height = 1;
+  glfwGetFramebufferSize(viewer.window, &width, &height);
+  WriteImage(path, viewer.scene->ReadPixels(width, height));
+}
+
+void OnKey(GLFWwindow* window, int key, int, int action, int) {
+  if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
+  Viewer& viewer = *GetViewer(window);
+  viewer.dirty = true;
+  viewer.message.clear();
+  switch (key) {
+    case GLFW_KEY_SPACE: viewer.playing = !viewer.playing; break;
+    case GLFW_KEY_RIGHT: viewer.playing = false; viewer.Step(1); break;
+    case GLFW_KEY_LEFT: viewer.playing = false; viewer.Step(-1); break;
+    case GLFW_KEY_HOME: viewer.SetFrame(viewer.run->first_frame); break;
+    case GLFW_KEY_END: viewer.SetFrame(viewer.run->last_frame); break;
+    case GLFW_KEY_T: viewer.mode = Mode::kTextured; break;
+    case GLFW_KEY_S: viewer.mode = Mode::kShaded; break;
+    case GLFW_KEY_W: viewer.mode = Mode::kWireframe; break;
+    case GLFW_KEY_B: viewer.mode = Mode::kWeights; break;
+    case GLFW_KEY_C: viewer.show_frusta = !viewer.show_frusta; break;
+    case GLFW_KEY_P: {
+      // The next redraw leaves the picture in the back buffer; draw it now without the timeline.
+      Draw(viewer, false);
+      const std::string name = ScreenshotName(viewer.frame);
+      try {
+        SaveScreenshot(viewer, name);
+        viewer.message = "saved " + fs::absolute(name).string();
+      } catch (const std::exception& e) {
+        viewer.message = std::string("screenshot failed: ") + e.what();
+      }
+      break;
+    }
+    case GLFW_KEY_ESCAPE:
+    case GLFW_KEY_Q: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
+    default: viewer.dirty = false; break;
+  }
+}
+
+void OnMouseButton(GLFWwindow* window, int button, int action, int) {
+  Viewer& viewer = *GetViewer(window);
+  double x = 0.0, y = 0.0;
+  CursorInFramebuffer(window, &x, &y);
+  int width = 1, height = 1;
+  glfwGetFramebufferSize(window, &width, &height);
+  viewer.last_x = x;
+  viewer.last_y = y;
+  const bool press = action == GLFW_PRESS;
+  if (button == GLFW_MOUSE_BUTTON_LEFT) {
+    if (press && y >= height - kTimelineHeightPx) {
+      viewer.scrubbing = true;
+      viewer.playing = false;
+      viewer.SetFrame(TimelineFrame(viewer, x, width));
+    } else {
+      viewer.rotating = press;
+      if (!press) viewer.scrubbing = false;
+    }
+  } else if (button == GLFW_MOUSE_BUTTON_RIGHT) {
+    viewer.zooming = press;
+  }
+  viewer.dirty = true;
+}
+
+void OnCursor(GLFWwindow* window, double, double) {
+  Viewer& viewer = *GetViewer(window);
+  double x = 0.0, y = 0.0;
+  CursorInFramebuffer(window, &x, &y);
+  const double dx = x - viewer.last_x, dy = y - viewer.last_y;
+  viewer.last_x = x;
+  viewer.last_y = y;
+  if (viewer.scrubbing) {
+    int width = 1, height = 1;
+    glfwGetFramebufferSize(window, &width, &height);
+    viewer.SetFrame(TimelineFrame(viewer, x, width));
+  } else if (viewer.rotating) {
+    viewer.orbit.azimuth_deg -= 0.4 * dx;
+    viewer.orbit.elevation_deg = std::clamp(viewer.orbit.elevation_deg + 0.4 * dy, -85.0, 85.0);
+    viewer.dirty = true;
+  } else if (viewer.zooming) {
+    viewer.orbit.distance_m *= std::exp(0.005 * dy);
+    viewer.dirty = true;
+  }
+}
+
+void OnScroll(GLFWwindow* window, double, double yoffset) {
+  Viewer& viewer = *GetViewer(window);
+  viewer.orbit.distance_m *= std::exp(-0.1 * yoffset);
+  viewer.dirty = true;
+}
+
+void OnResize(GLFWwindow* window, int, int) { GetViewer(window)->dirty = true; }
+
+// The description of GLFW's last error on this thread, or "unknown error".
+std::string GlfwError() {
+  const char* description = nullptr;
+  glfwGetError(&description);
+  return description != nullptr ? description : "unknown error";
+}
+
+// Owns glfwInit/glfwTerminate and the window.
+class Window {
+ public:
+  Window(int width, int height, bool visible) {
+    const char* display = std::getenv("DISPLAY");
+    const char* wayland = std::getenv("WAYLAND_DISPLAY");
+    const std::string hint =
+        " (no display? run it under a virtual X server: xvfb-run -a -s '-screen 0 1280x1024x24' confluent view ...)";
+    if ((display == nullptr || *display == '\0') && (wayland == nullptr || *wayland == '\0'))
+      throw Error("cannot open a window: DISPLAY is not set" + hint);
+    if (glfwInit() != GLFW_TRUE) throw Error("cannot open a window: GLFW failed to initialise: " + GlfwError() + hint);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    glfwWindowHint(GLFW_VISIBLE, visible ? GLFW_TRUE : GLFW_FALSE);
+    glfwWindowHint(GLFW_DOUBLEBUFFER, GLFW_TRUE);
+    window_ = glfwCreateWindow(width, height, "confluent view", nullptr, nullptr);
+    if (window_ == nullptr) {
+      glfwTerminate();
+      throw Error("cannot open a window with an OpenGL 3.3 core context: " + GlfwError() + hint);
+    }
+    glfwMakeContextCurrent(window_);
+    glfwSwapInterval(1);
+  }
+  ~Window() {
+    glfwDestroyWindow(window_);
+    glfwTerminate();
+  }
+  Window(const Window&) = delete;
+  Window& operator=(const Window&) = delete;
+  GLFWwindow* get() const { return window_; }
+
+ private:
+  GLFWwindow* window_ = nullptr;
+};
+
+// "WxH" -> width, height.
+void ParseSize(const std::string& text, int* width, int* height) {
+  const auto x = text.find('x');
+  try {
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    std::size_t used = 0;
+    *width = std::stoi(text.substr(0, x), &used);
+    if (used != x) throw std::invalid_argument("width");
+    *height = std::stoi(text.substr(x + 1), &used);
+    if (used != text.size() - x - 1) throw std::invalid_argument("height");
+  } catch (const std::exception&) {
+    throw UsageError("--size: expected WIDTHxHEIGHT such as 960x720, got '" + text + "'");
+  }
+  if (*width < 16 || *height < 16 || *width > 8192 || *height > 8192)
+    throw UsageError("--size: width and height must be in 16..8192, got '" + text + "'");
+}
+
+int RunView(const ParsedArgs& args, const Context&) {
+  const std::string screenshot = args.get("screenshot");
+  int width = 960, height = 720;
+  ParseSize(args.get("size", "960x720"), &width, &height);
+  const int exit_after = args.get_int("exit-after-frames", 0);
+  if (exit_after < 0) throw UsageError("--exit-after-frames: must be >= 0");
+  const double fps = args.get_double("fps", 25.0);
+  if (!(fps > 0.0 && fps <= 240.0)) throw UsageError("--fps: must be in (0, 240]");
+
+  const ViewerRun run = OpenViewerRun(args.positionals()[0], args.get("capture"));
+  FrameCache frames(&run, 8);
+  CaptureState capture = OpenCaptureFor(run);
+
+  Viewer viewer;
+  viewer.run = &run;
+  viewer.frames = &frames;
+  viewer.capture = &capture;
+  viewer.fps = fps;
+  viewer.show_frusta = args.has("frusta");
+  viewer.playing = args.has("play");
+  viewer.frame = run.first_frame;
+  if (args.has("frame")) {
+    const int frame = args.get_int("frame", 0);
+    if (frame < run.first_frame || frame > run.last_frame)
+      throw UsageError("--frame: " + std::to_string(frame) + " is outside the run's frames " +
+                       std::to_string(run.first_frame) + ".." + std::to_string(run.last_frame));
+    viewer.frame = frame;
+  }
+  viewer.mode = args.has("mode") ? ParseMode(args.get("mode"))
+                                  : (capture.capture ? Mode::kTextured : Mode::kShaded);
+  if (!screenshot.empty() && viewer.mode != Mode::kShaded && viewer.mode != Mode::kWireframe && !capture.capture)
+    throw InputError(run.root, std::string(ModeName(viewer.mode)) + " needs the capture: " + capture.error);
+
+  // The view stays fixed over the sequence: it frames the first frame that can be read.
+  std::string error;
+  std::shared_ptr<const Mesh> reference;
+  for (int frame : run.present)
+    if ((reference = frames.Get(frame, &error))) break;
+  if (!reference) throw InputError(run.mesh_dir, "no frame can be read: " + error);
+  viewer.orbit = InitialOrbit(*reference);
+  viewer.orbit.azimuth_deg = args.get_double("azimuth", viewer.orbit.azimuth_deg);
+  viewer.orbit.elevation_deg = args.get_double("elevation", viewer.orbit.elevation_deg);
+  if (!(std::abs(viewer.orbit.elevation_deg) <= 85.0)) throw UsageError("--elevation: must be in -85..85 degrees");
+  const double zoom = args.get_double("zoom", 1.0);
+  if (!(zoom > 0.0 && zoom < 1000.0)) throw UsageError("--zoom: must be positive");
+  viewer.orbit.distance_m *= zoom;
+  if (!screenshot.empty() && !run.has_frame(viewer.frame))
+    throw InputError(run.FramePath(viewer.frame), "frame " + std::to_string(viewer.frame) + " is missing");
+
+  Window window(width, height, true);
+  viewer.window = window.get();
+  glfwSetWindowUserPointer(viewer.window, &viewer);
+  viewer.scene = std::make_unique<ViewerScene>();
+  // The GL objects must go while the window's context is still current.
+  struct SceneReset {
+    Viewer* viewer;
+    ~SceneReset() {
+      glfwMakeContextCurrent(viewer->window);
+      viewer->scene.reset();
+      glfwMakeContextCurrent(nullptr);  // the offscreen renderers free their GL state in EGL
+      viewer->texturer.reset();
+      viewer->depth_renderer.reset();
+      ReleaseCurrentEglContext();
+    }
+  } scene_reset{&viewer};
+
+  if (!screenshot.empty()) {
+    Draw(viewer, false);
+    if (!viewer.frame_error.empty()) throw InputError(run.FramePath(viewer.frame), viewer.frame_error);
+    if (!viewer.note.empty()) throw Error(viewer.note);
+    SaveScreenshot(viewer, screenshot);
+    std::printf("wrote %s (frame %d, %s)\n", screenshot.c_str(), viewer.frame, ModeName(viewer.mode));
+    return 0;
+  }
+
+  glfwSetKeyCallback(viewer.window, OnKey);
+  glfwSetMouseButtonCallback(viewer.window, OnMouseButton);
+  glfwSetCursorPosCallback(viewer.window, OnCursor);
+  glfwSetScrollCallback(viewer.window, OnScroll);
+  glfwSetFramebufferSizeCallback(viewer.window, OnResize);
+  std::printf(
+      "confluent view: %s frames %d..%d (%s). Mouse: left drag orbit, right drag / wheel zoom, click the "
+      "timeline to scrub.\nKeys: space play/pause, left/right step, T textured, S shaded, W wireframe, B blend "
+      "weights, C camera frusta, P screenshot, Q quit.\n",
+      run.mesh_kind.c_str(), run.first_frame, run.last_frame, run.mesh_dir.c_str());
+  if (!capture.capture) std::printf("confluent view: %s\n", capture.error.c_str());
+  double next_step = glfwGetTime() + 1.0 / viewer.fps;
+  while (glfwWindowShouldClose(viewer.window) == GLFW_FALSE) {
+    if (viewer.playing && glfwGetTime() >= next_step) {
+      viewer.Step(1);
+      next_step = glfwGetTime() + 1.0 / viewer.fps;
+    }
+    if (viewer.dirty) {
+      viewer.dirty = false;
+      Draw(viewer, true);
+      UpdateTitle(viewer);
+      glfwSwapBuffers(viewer.window);
+      ++viewer.drawn_frames;
+      if (exit_after > 0 && viewer.drawn_frames >= exit_after) break;
+    }
+    if (viewer.playing) {
+      glfwWaitEventsTimeout(std::max(0.0, next_step - glfwGetTime()));
+    } else if (exit_after > 0) {
+      viewer.dirty = true;  // scripted smoke runs keep drawing
+      glfwPollEvents();
+    } else {
+      glfwWaitEventsTimeout(0.5);
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+CommandSpec MakeViewCommand() {
+  CommandSpec spec;
+  spec.name = "view";
+  spec.summary = "interactive viewer of a run's 3D video (GLFW window; needs a display)";
+  spec.usage = "RUN [--capture CAPTURE] [--screenshot FILE --frame N --mode textured|shaded|wireframe|weights]";
+  spec.description =
+      "Plays RUN/scan/<frame>.ply (or RUN/template/<frame>.ply when there is no scan/) in a window. The capture\n"
+      "named in RUN/run.json (or --capture) textures the meshes projectively from its cameras, except the\n"
+      "run's excluded cameras. Frames are loaded on demand; a missing frame is named in the window title.\n"
+      "\n"
+      "Mouse: left drag orbits, right drag or the wheel zooms, a click or drag on the timeline bar scrubs.\n"
+      "Keys: space play/pause, left/right arrows step (Home/End jump), T textured, S shaded (vertex colours,\n"
+      "lit), W wireframe, B blend weights (each vertex in the colour of the camera with the largest weight),\n"
+      "C camera frusta (used cameras in their blend-weight colour, excluded ones grey), P save a screenshot\n"
+      "(confluent-view-<frame>.png in the working folder), Q or Esc quit.\n"
+      "\n"
+      "The initial view looks at the centre of the first readable frame's bounding box from the front (-y),\n"
+      "15 degrees above, at 1.2 bounding-sphere radii / sin(20 deg), with a 40 degree vertical field of view.\n"
+      "--screenshot FILE renders --frame N in --mode in that view (without the timeline), writes a PNG of\n"
+      "--size and exits. Without a display, run it under xvfb-run.";
+  spec.min_positionals = 1;
+  spec.max_positionals = 1;
+  spec.options = {
+      {"capture", "CAPTURE", "capture folder for texturing and frusta (default: the one in run.json)"},
+      {"screenshot", "FILE", "render one frame to FILE (PNG) and exit"},
+      {"frame", "N", "frame to show first (default: the first frame)"},
+      {"mode", "MODE", "textured (default with a capture), shaded (default without), wireframe or weights"},
+      {"frusta", "", "show the capture's camera frusta from the start"},
+      {"azimuth", "DEG", "initial view azimuth around the vertical axis (default -90: from -y; 0: from +x)"},
+      {"elevation", "DEG", "initial view elevation (default 15)"},
+      {"zoom", "F", "initial view distance times F (default 1; 3 shows a camera ring)"},
+      {"size", "WxH", "window size in pixels (default 960x720)"},
+      {"fps", "F", "playback rate (default 25)"},
+      {"play", "", "start playing"},
+      {"exit-after-frames", "K", "quit after drawing K frames (scripted smoke tests)"},
+  };
+  spec.run = RunView;
+  return spec;
+}
+
+}  // namespace confluent::app

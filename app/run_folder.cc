@@ -1,0 +1,73 @@
+#include "app/run_folder.h"
+
+#include <chrono>
+#include <filesystem>
+#include <sstream>
+
+#include "app/frame_range.h"
+#include "core/atomic_file.h"
+
+namespace confluent::app {
+namespace fs = std::filesystem;
+
+std::string RunFolder::Path(const std::string& relative) const { return (fs::path(root) / relative).string(); }
+
+std::string RunFolder::MaskPath(const std::string& camera, int frame) const {
+  return Path("masks/" + camera + "/" + FrameStem(frame) + ".png");
+}
+std::string RunFolder::TrackingStatePath(int frame) const { return Path("tracking/" + FrameStem(frame) + ".json"); }
+std::string RunFolder::TemplatePath(int frame) const { return Path("template/" + FrameStem(frame) + ".ply"); }
+std::string RunFolder::ScanPath(int frame) const { return Path("scan/" + FrameStem(frame) + ".ply"); }
+std::string RunFolder::RenderPath(const std::string& view, int frame) const {
+  return Path("renders/" + view + "/" + FrameStem(frame) + ".png");
+}
+std::string RunFolder::VideoPath(const std::string& view) const { return Path("renders/" + view + ".mp4"); }
+
+TimingLog::TimingLog(std::string path) : path_(std::move(path)) {
+  if (!fs::exists(path_)) return;
+  std::istringstream in(ReadTextFile(path_));
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    Row row;
+    std::string frame, seconds;
+    if (!std::getline(fields, row.stage, ',') || !std::getline(fields, frame, ',') || !std::getline(fields, seconds)) continue;
+    try {
+      row.frame = std::stoi(frame);
+      row.seconds = std::stod(seconds);
+    } catch (const std::exception&) {
+      continue;  // a damaged row of an interrupted run is dropped, not fatal
+    }
+    rows_.push_back(row);
+  }
+}
+
+void TimingLog::Add(const std::string& stage, int frame, double seconds) {
+  for (Row& row : rows_)
+    if (row.stage == stage && row.frame == frame && frame >= 0) {
+      row.seconds = seconds;
+      return;
+    }
+  rows_.push_back({stage, frame, seconds});
+}
+
+void TimingLog::Save() const {
+  std::ostringstream out;
+  out << "stage,frame,seconds\n";
+  for (const Row& row : rows_) out << row.stage << "," << row.frame << "," << row.seconds << "\n";
+  WriteTextFile(path_, out.str());
+}
+
+double TimingLog::StageSeconds(const std::string& stage) const {
+  double sum = 0;
+  for (const Row& row : rows_)
+    if (row.stage == stage) sum += row.seconds;
+  return sum;
+}
+
+double NowSeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace confluent::app

@@ -1,0 +1,48 @@
+#pragma once
+// A run's output folder (DESIGN.md section 4): the paths of its files, and its timing log.
+
+#include <string>
+#include <vector>
+
+namespace confluent::app {
+
+// Paths inside a run folder. Frame files use six-digit stems (000042.ply).
+struct RunFolder {
+  std::string root;
+
+  std::string Path(const std::string& relative) const;          // root/relative
+  std::string MaskPath(const std::string& camera, int frame) const;   // masks/<cam>/<frame>.png
+  std::string TrackingStatePath(int frame) const;                // tracking/<frame>.json
+  std::string TemplatePath(int frame) const;                     // template/<frame>.ply
+  std::string ScanPath(int frame) const;                         // scan/<frame>.ply
+  std::string RenderPath(const std::string& view, int frame) const;  // renders/<view>/<frame>.png
+  std::string VideoPath(const std::string& view) const;          // renders/<view>.mp4
+};
+
+// timings.csv: one row per stage and frame (frame -1: work of the stage that is not per frame,
+// e.g. a factorisation). Rows of earlier (resumed) invocations are kept; a frame computed again
+// replaces its row.
+class TimingLog {
+ public:
+  // Loads `path` when it exists (a resumed run).
+  explicit TimingLog(std::string path);
+  void Add(const std::string& stage, int frame, double seconds);
+  // Writes the log atomically (throws OutputError).
+  void Save() const;
+  // Sum of the seconds of one stage over all rows.
+  double StageSeconds(const std::string& stage) const;
+
+ private:
+  struct Row {
+    std::string stage;
+    int frame;
+    double seconds;
+  };
+  std::string path_;
+  std::vector<Row> rows_;
+};
+
+// A monotonic clock in seconds, for stage and frame timings.
+double NowSeconds();
+
+}  // namespace confluent::app

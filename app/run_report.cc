@@ -1,0 +1,137 @@
+#include "app/run_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace confluent::app {
+namespace fs = std::filesystem;
+
+namespace {
+
+nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+double FromJson(const nlohmann::json& v) { return v.is_number() ? v.get<double>() : NAN; }
+
+nlohmann::json ScoresJson(const GeometryScores& s) {
+  return {{"iou_mean", Number(s.iou_mean)},     {"iou_min", Number(s.iou_min)},
+          {"xor_percent_mean", Number(s.xor_percent_mean)}, {"psnr_db_mean", Number(s.psnr_db_mean)},
+          {"ssim_mean", Number(s.ssim_mean)}};
+}
+
+GeometryScores ScoresFromJson(const nlohmann::json& j) {
+  return {FromJson(j.at("iou_mean")), FromJson(j.at("iou_min")), FromJson(j.at("xor_percent_mean")),
+          FromJson(j.at("psnr_db_mean")), FromJson(j.at("ssim_mean"))};
+}
+
+std::string Fixed(double v, int decimals) {
+  if (!std::isfinite(v)) return "-";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.*f", decimals, v);
+  return text;
+}
+
+std::string Escape(const std::string& text) {
+  std::string out;
+  for (char c : text) out += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
+  return out;
+}
+
+}  // namespace
+
+nlohmann::json EvaluationSummary::ToJson() const {
+  nlohmann::json json;
+  json["format"] = "confluent.metrics/1";
+  json["heldout_cameras"] = heldout;
+  json["frames"] = frames;
+  json["masking"] = "PSNR and SSIM over the union of the true and the rendered silhouette; IoU and XOR over the whole image";
+  if (has_scan) json["scan"] = ScoresJson(scan);
+  json["template"] = ScoresJson(templ);
+  json["scan_vertex_error_mean_m"] = Number(vertex_error_mean_m);
+  json["warnings"] = warnings;
+  return json;
+}
+
+EvaluationSummary EvaluationSummary::Read(const std::string& path) {
+  EvaluationSummary summary;
+  try {
+    const nlohmann::json json = nlohmann::json::parse(ReadTextFile(path));
+    summary.heldout = json.at("heldout_cameras").get<std::vector<std::string>>();
+    summary.frames = json.at("frames").get<int>();
+    summary.has_scan = json.contains("scan");
+    if (summary.has_scan) summary.scan = ScoresFromJson(json.at("scan"));
+    summary.templ = ScoresFromJson(json.at("template"));
+    summary.vertex_error_mean_m = FromJson(json.at("scan_vertex_error_mean_m"));
+    summary.warnings = json.value("warnings", std::vector<std::string>{});
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path, std::string("not a metrics.json: ") + e.what());
+  }
+  return summary;
+}
+
+std::string SummaryTable(const EvaluationSummary& summary) {
+  std::ostringstream out;
+  std::string cameras;
+  for (const std::string& name : summary.heldout) cameras += (cameras.empty() ? "" : ", ") + name;
+  out << "held-out evaluation (" << cameras << "; " << summary.frames << " frames)\n";
+  char line[160];
+  std::snprintf(line, sizeof line, "  %-10s %9s %9s %8s %10s %7s\n", "geometry", "IoU mean", "IoU min", "XOR %", "PSNR dB", "SSIM");
+  out << line;
+  auto row = [&](const char* name, const GeometryScores& s) {
+    std::snprintf(line, sizeof line, "  %-10s %9s %9s %8s %10s %7s\n", name, Fixed(s.iou_mean, 4).c_str(),
+                  Fixed(s.iou_min, 4).c_str(), Fixed(s.xor_percent_mean, 1).c_str(), Fixed(s.psnr_db_mean, 2).c_str(),
+                  Fixed(s.ssim_mean, 4).c_str());
+    out << line;
+  };
+  if (summary.has_scan) row("scan", summary.scan);
+  row("template", summary.templ);
+  if (std::isfinite(summary.vertex_error_mean_m))
+    out << "  scan vertex error against the ground truth: mean " << Fixed(100.0 * summary.vertex_error_mean_m, 2) << " cm\n";
+  return out.str();
+}
+
+std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, const Rig& rig,
+                       const std::vector<int>& heldout) {
+  std::ostringstream html;
+  html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>confluent run report</title>\n"
+       << "<style>body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse}"
+       << "td,th{border:1px solid #bbb;padding:4px 10px;text-align:right}img{max-width:100%;margin:6px 0}"
+       << "pre{background:#f4f4f4;padding:8px}</style></head><body>\n";
+  html << "<h1>confluent: held-out evaluation</h1>\n<p>Run: <code>" << Escape(fs::absolute(run.root).string())
+       << "</code></p>\n";
+  html << "<h2>Summary</h2>\n<pre>" << Escape(SummaryTable(summary)) << "</pre>\n";
+  html << "<p>PSNR and SSIM are computed inside the union of the true and the rendered silhouette; IoU and the XOR "
+          "error (% of the true silhouette area) over the whole image.</p>\n";
+  for (const std::string& warning : summary.warnings) html << "<p><b>Warning:</b> " << Escape(warning) << "</p>\n";
+  if (fs::exists(run.VideoPath("orbit")))
+    html << "<h2>3D video</h2>\n<video controls width=\"960\" src=\"renders/orbit.mp4\"></video>\n";
+  html << "<h2>Per frame</h2>\n<img src=\"plots/iou_per_frame.png\"><br><img src=\"plots/psnr_per_frame.png\">\n";
+  html << "<h2>Error heat maps</h2>\n";
+  for (int c : heldout) html << "<img src=\"plots/error_heatmap_" << rig.cameras[c].name << ".png\" width=\"640\">\n";
+  html << "<h2>Real | rendered | difference</h2>\n";
+  for (int c : heldout) {
+    const fs::path dir = fs::path(run.root) / "evaluation" / rig.cameras[c].name;
+    if (!fs::is_directory(dir)) continue;
+    std::vector<std::string> files;
+    for (const auto& entry : fs::directory_iterator(dir)) files.push_back(entry.path().filename().string());
+    std::sort(files.begin(), files.end());
+    for (const std::string& file : files)
+      html << "<p>" << rig.cameras[c].name << " frame " << fs::path(file).stem().string() << "<br><img src=\"evaluation/"
+           << rig.cameras[c].name << "/" << file << "\"></p>\n";
+  }
+  if (fs::exists(run.Path("timings.csv"))) {
+    TimingLog timings(run.Path("timings.csv"));
+    html << "<h2>Time per stage</h2>\n<table><tr><th>stage</th><th>seconds</th></tr>\n";
+    for (const char* stage : {"silhouettes", "tracking", "correspondences", "deform_factor", "deform", "render", "video"})
+      html << "<tr><td style=\"text-align:left\">" << stage << "</td><td>" << Fixed(timings.StageSeconds(stage), 1) << "</td></tr>\n";
+    html << "</table>\n";
+  }
+  html << "</body></html>\n";
+  return html.str();
+}
+
+}  // namespace confluent::app

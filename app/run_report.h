@@ -1,0 +1,46 @@
+#pragma once
+// The held-out evaluation summary of a run: its JSON, the terminal table and report.html.
+
+#include <string>
+#include <vector>
+
+#include "app/run_folder.h"
+#include "calib/camera.h"
+
+#include <nlohmann/json.hpp>
+
+namespace confluent::app {
+
+// Mean scores of one geometry (the animated scan or the template) over held-out cameras and frames.
+struct GeometryScores {
+  double iou_mean = 0.0;
+  double iou_min = 0.0;
+  double xor_percent_mean = 0.0;
+  double psnr_db_mean = 0.0;
+  double ssim_mean = 0.0;
+};
+
+// What `confluent evaluate` found.
+struct EvaluationSummary {
+  std::vector<std::string> heldout;
+  int frames = 0;
+  bool has_scan = false;
+  GeometryScores scan;
+  GeometryScores templ;
+  double vertex_error_mean_m = 0.0;  // NaN without ground-truth meshes
+  std::vector<std::string> warnings;
+
+  nlohmann::json ToJson() const;
+  // Reads the summary part of a metrics.json. Throws InputError naming the file.
+  static EvaluationSummary Read(const std::string& metrics_json_path);
+};
+
+// A short fixed-width table for the terminal.
+std::string SummaryTable(const EvaluationSummary& summary);
+
+// report.html of the run: the summary table, the plots, the side-by-side pictures and the
+// timings, with paths relative to the run folder.
+std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, const Rig& rig,
+                       const std::vector<int>& heldout);
+
+}  // namespace confluent::app

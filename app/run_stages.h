@@ -1,0 +1,73 @@
+#pragma once
+// The stages of `confluent run`, in order. Every stage is resumable: it skips the frames whose
+// output files exist (all outputs are written atomically), records its per-frame times in the
+// TimingLog and reports progress with its own bar.
+
+#include <string>
+#include <vector>
+
+#include "app/frame_range.h"
+#include "app/run_folder.h"
+#include "calib/capture.h"
+#include "core/progress.h"
+#include "tracking/body_template.h"
+
+namespace confluent::app {
+
+// What every stage needs to know about the run.
+struct RunInputs {
+  const Capture* capture = nullptr;
+  RunFolder folder;
+  FrameRange frames;                 // the frames of this invocation (a shard, or all)
+  std::vector<bool> excluded;        // per rig camera: held out, never used
+  std::string masks_dir;             // given masks (<dir>/<cam>/<frame>.png); empty: extract into the run
+  std::string scan_path;             // empty: the 3D video uses the template
+  std::string correspondences_path;  // empty: automatic registration and correspondences
+  int threads = 2;
+};
+
+// How much a stage did.
+struct StageReport {
+  explicit StageReport(std::string name) : stage(std::move(name)) {}
+  std::string stage;
+  int computed = 0;  // frames computed now
+  int skipped = 0;   // frames already finished by an earlier invocation
+  double seconds = 0.0;
+  std::vector<std::string> notes;  // lines for the summary (warnings, figures)
+};
+
+// The mask file of camera `camera` at `frame` used by the run (given masks or the run's own).
+std::string RunMaskPath(const RunInputs& inputs, int camera, int frame);
+
+// Silhouettes of every camera (held-out ones too, for evaluation) into RUN/masks; skipped when
+// masks are given.
+StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings);
+
+// Marker-less tracking of the template: RUN/tracking/<frame>.json (the state that lets a later
+// invocation or the next shard continue), RUN/template/<frame>.ply, then RUN/poses.json and
+// RUN/motion.bvh over every tracked frame. Returns the fitted shape in `shape`.
+StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, const ProgressCallback& progress,
+                             TimingLog* timings, BodyShape* shape);
+
+// Registration of the template to the scan and the correspondences (given or automatic):
+// RUN/correspondences.json and RUN/template_reference.ply (the template in the scan's pose).
+StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& body, const BodyShape& shape,
+                                   TimingLog* timings);
+
+// Confluent Motion of the scan driven by RUN/template/<frame>.ply: RUN/scan/<frame>.ply.
+StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings);
+
+// Options of the 3D-video render stage.
+struct RenderStageOptions {
+  std::string view = "orbit";  // renders/<view>/
+  int width = 960;
+  int height = 720;
+  double fps = 25.0;
+};
+
+// The 3D video: an orbit around the actor, the scan (or the template without a scan)
+// projectively textured from the used cameras, RUN/renders/orbit/<frame>.png and orbit.mp4.
+StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& options, const ProgressCallback& progress,
+                           TimingLog* timings);
+
+}  // namespace confluent::app

@@ -1,0 +1,170 @@
+// The capture-side stages of `confluent run`: silhouettes and tracking.
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <mutex>
+
+#include "app/run_stages.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/mesh_io.h"
+#include "silhouette/silhouette.h"
+#include "tracking/motion_io.h"
+#include "tracking/tracker.h"
+
+namespace confluent::app {
+namespace fs = std::filesystem;
+
+std::string RunMaskPath(const RunInputs& inputs, int camera, int frame) {
+  const std::string& name = inputs.capture->rig().cameras[camera].name;
+  if (!inputs.masks_dir.empty()) return (fs::path(inputs.masks_dir) / name / (FrameStem(frame) + ".png")).string();
+  return inputs.folder.MaskPath(name, frame);
+}
+
+StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings) {
+  StageReport report("silhouettes");
+  const double start = NowSeconds();
+  const Capture& capture = *inputs.capture;
+  if (!inputs.masks_dir.empty()) {
+    for (int c = 0; c < capture.num_cameras(); ++c)
+      if (!inputs.excluded[c] && !fs::exists(RunMaskPath(inputs, c, inputs.frames.first)))
+        throw InputError(RunMaskPath(inputs, c, inputs.frames.first), "mask file not found (given --masks folder)");
+    report.skipped = inputs.frames.size();
+    report.notes.push_back("masks given: " + inputs.masks_dir);
+    return report;
+  }
+  // The first frame with a missing mask; everything from there on is (re)computed.
+  int first_missing = inputs.frames.end;
+  for (int frame = inputs.frames.first; frame < inputs.frames.end && first_missing == inputs.frames.end; ++frame)
+    for (int c = 0; c < capture.num_cameras(); ++c)
+      if (!fs::exists(RunMaskPath(inputs, c, frame))) {
+        first_missing = frame;
+        break;
+      }
+  report.skipped = first_missing - inputs.frames.first;
+  if (first_missing == inputs.frames.end) return report;
+
+  SilhouetteOptions options;
+  options.threads = inputs.threads;
+  std::mutex mutex;
+  std::map<int, int> cameras_done;
+  double last_frame_done = NowSeconds();
+  auto sink = [&](int camera, int frame, const Image&, const Image& mask, const MaskSummary& summary) {
+    const std::string path = RunMaskPath(inputs, camera, frame);
+    fs::create_directories(fs::path(path).parent_path());
+    WriteImage(path, mask);
+    std::lock_guard<std::mutex> lock(mutex);
+    if (summary.empty) report.notes.push_back("empty mask: " + capture.rig().cameras[camera].name + " frame " + std::to_string(frame));
+    if (++cameras_done[frame] == capture.num_cameras()) {
+      const double now = NowSeconds();
+      timings->Add("silhouettes", frame, now - last_frame_done);
+      last_frame_done = now;
+    }
+  };
+  const SilhouetteSummary summary =
+      ExtractSilhouettes(capture, first_missing, inputs.frames.end, options, sink, progress);
+  for (const std::string& warning : summary.warnings) report.notes.push_back(warning);
+  report.computed = inputs.frames.end - first_missing;
+  report.seconds = NowSeconds() - start;
+  timings->Save();
+  return report;
+}
+
+namespace {
+
+// The masks of one frame for the tracker: held-out cameras left empty.
+std::vector<Image> TrackingMasks(const RunInputs& inputs, int frame) {
+  const Rig& rig = inputs.capture->rig();
+  std::vector<Image> masks(rig.size());
+  for (int c = 0; c < rig.size(); ++c) {
+    if (inputs.excluded[c]) continue;
+    const std::string path = RunMaskPath(inputs, c, frame);
+    masks[c] = ReadMaskFile(path);
+    if (masks[c].width != rig.cameras[c].width || masks[c].height != rig.cameras[c].height)
+      throw InputError(path, "mask size differs from the calibration of camera " + rig.cameras[c].name);
+  }
+  return masks;
+}
+
+bool TrackedFrameFinished(const RunFolder& folder, int frame) {
+  return fs::exists(folder.TrackingStatePath(frame)) && fs::exists(folder.TemplatePath(frame));
+}
+
+}  // namespace
+
+StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, const ProgressCallback& progress,
+                             TimingLog* timings, BodyShape* shape) {
+  StageReport report("tracking");
+  const double start = NowSeconds();
+  const Rig& rig = inputs.capture->rig();
+  const std::vector<std::string> camera_names = rig.names();
+  fs::create_directories(inputs.folder.Path("tracking"));
+  fs::create_directories(inputs.folder.Path("template"));
+  Tracker tracker(rig, inputs.excluded);
+  auto read_state = [&](int frame) {
+    PosesFile state = ReadPosesJson(inputs.folder.TrackingStatePath(frame), body, camera_names);
+    if (state.frames.size() != 1) throw InputError(inputs.folder.TrackingStatePath(frame), "expected one frame");
+    return state;
+  };
+  int done = 0;
+  for (int frame = inputs.frames.first; frame < inputs.frames.end; ++frame) {
+    if (TrackedFrameFinished(inputs.folder, frame)) {
+      ++report.skipped;
+      ReportProgress(progress, "tracking", ++done, inputs.frames.size(), "frame " + std::to_string(frame) + " (done before)");
+      continue;
+    }
+    if (!tracker.initialized() && frame > 0 && TrackedFrameFinished(inputs.folder, frame - 1)) {
+      // Continue from the saved state of the frames just before (a resumed run or a shard boundary).
+      std::vector<TemplatePose> poses;
+      std::vector<double> ious;
+      BodyShape saved_shape;
+      for (int back = std::max(0, frame - 4); back < frame; ++back) {
+        if (!TrackedFrameFinished(inputs.folder, back)) continue;
+        const PosesFile state = read_state(back);
+        saved_shape = state.shape;
+        poses.push_back(state.frames[0].pose);
+        ious.push_back(state.frames[0].mean_iou);
+      }
+      tracker.Resume(saved_shape, poses, ious);
+    }
+    const std::vector<Image> masks = TrackingMasks(inputs, frame);
+    const double frame_start = NowSeconds();
+    TrackedFrame result = tracker.initialized() ? tracker.Track(frame, masks) : tracker.Initialize(frame, masks);
+    if (!tracker.initialized())
+      throw InputError(RunMaskPath(inputs, 0, frame), "frame " + std::to_string(frame) +
+                                                          ": no visual hull from the masks (empty or inconsistent masks)");
+    WriteMesh(inputs.folder.TemplatePath(frame), body.PosedMesh(tracker.shape(), result.pose));
+    WritePosesJson(inputs.folder.TrackingStatePath(frame), body, tracker.shape(), camera_names, {result}, 25.0);
+    timings->Add("tracking", frame, NowSeconds() - frame_start);
+    for (const std::string& flag : result.flags)
+      if (flag != "initialized") report.notes.push_back("frame " + std::to_string(frame) + ": " + flag);
+    ++report.computed;
+    ReportProgress(progress, "tracking", ++done, inputs.frames.size(),
+                   "frame " + std::to_string(frame) + " IoU " + std::to_string(result.mean_iou).substr(0, 5));
+    if (report.computed % 10 == 0) timings->Save();
+  }
+  timings->Save();
+
+  // poses.json and motion.bvh over every frame tracked so far (all shards).
+  std::vector<TrackedFrame> frames;
+  for (int frame = 0; frame < inputs.capture->num_frames(); ++frame) {
+    if (!TrackedFrameFinished(inputs.folder, frame)) continue;
+    PosesFile state = read_state(frame);
+    if (frame == inputs.frames.first || frames.empty()) *shape = state.shape;
+    frames.push_back(std::move(state.frames[0]));
+  }
+  const double fps = 25.0;
+  WritePosesJson(inputs.folder.Path("poses.json"), body, *shape, camera_names, frames, fps);
+  std::vector<Pose> poses;
+  for (const TrackedFrame& f : frames) poses.push_back(body.ToPose(f.pose));
+  WriteBvh(inputs.folder.Path("motion.bvh"), body.MakeSkeleton(*shape), poses, 1.0 / fps);
+  double iou_sum = 0;
+  for (const TrackedFrame& f : frames) iou_sum += f.mean_iou;
+  report.notes.push_back("mean IoU on the tracking cameras " + std::to_string(iou_sum / std::max<std::size_t>(1, frames.size())).substr(0, 5) +
+                         " over " + std::to_string(frames.size()) + " frames");
+  report.seconds = NowSeconds() - start;
+  return report;
+}
+
+}  // namespace confluent::app

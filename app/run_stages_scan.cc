@@ -1,0 +1,222 @@
+// The scan-side stages of `confluent run`: registration and correspondences, Confluent Motion,
+// and the 3D-video render.
+
+#include <algorithm>
+#include <filesystem>
+
+#include "app/run_stages.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/mesh_io.h"
+#include "core/video_writer.h"
+#include "deform/confluent_motion.h"
+#include "deform/correspondence_placement.h"
+#include "deform/correspondences.h"
+#include "render/camera_path.h"
+#include "render/projective_texture.h"
+#include "tracking/scan_registration.h"
+
+namespace confluent::app {
+namespace fs = std::filesystem;
+
+StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& body, const BodyShape& shape,
+                                   TimingLog* timings) {
+  StageReport report("correspondences");
+  const double start = NowSeconds();
+  const std::string out_path = inputs.folder.Path("correspondences.json");
+  const std::string reference_path = inputs.folder.Path("template_reference.ply");
+  if (fs::exists(out_path) && fs::exists(reference_path)) {
+    report.skipped = 1;
+    return report;
+  }
+  const Mesh scan = ReadMesh(inputs.scan_path);
+  // The template in the scan's reference pose, with the tracked shape: the rotations of the
+  // tracked frames are then measured from the pose the scan stands in.
+  ScanRegistrationOptions options;
+  options.fit_shape = false;
+  options.initial_shape = shape;
+  const ScanRegistration registration = RegisterTemplateToScan(body, scan, options, inputs.scan_path);
+  const Mesh reference = body.PosedMesh(shape, registration.pose);
+  char residual[64];
+  std::snprintf(residual, sizeof residual, "template registered to the scan: rms residual %.2f cm",
+                100.0 * registration.rms_residual_m);
+  report.notes.push_back(residual);
+  for (const std::string& warning : registration.warnings) report.notes.push_back("warning: " + warning);
+
+  Correspondences correspondences;
+  if (!inputs.correspondences_path.empty()) {
+    correspondences = ReadCorrespondences(inputs.correspondences_path);
+    ValidateCorrespondences(correspondences, static_cast<int>(reference.faces.size()), static_cast<int>(scan.faces.size()),
+                            inputs.correspondences_path);
+    report.notes.push_back(std::to_string(correspondences.pairs.size()) + " correspondences given: " + inputs.correspondences_path);
+  } else {
+    correspondences = PlaceCorrespondences(reference, scan);
+    report.notes.push_back(std::to_string(correspondences.pairs.size()) + " correspondences placed automatically");
+  }
+  correspondences.scan_path = fs::absolute(inputs.scan_path).string();
+  correspondences.template_path = "template_reference.ply";
+  WriteMesh(reference_path, reference);
+  WriteCorrespondences(out_path, correspondences);
+  report.computed = 1;
+  report.seconds = NowSeconds() - start;
+  timings->Add("correspondences", -1, report.seconds);
+  timings->Save();
+  return report;
+}
+
+StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings) {
+  StageReport report("deform");
+  const double start = NowSeconds();
+  const RunFolder& folder = inputs.folder;
+  std::vector<int> todo;
+  for (int frame = inputs.frames.first; frame < inputs.frames.end; ++frame) {
+    if (fs::exists(folder.ScanPath(frame))) ++report.skipped;
+    else todo.push_back(frame);
+  }
+  if (todo.empty()) return report;
+
+  const Mesh scan = ReadMesh(inputs.scan_path);
+  const std::string reference_path = folder.Path("template_reference.ply");
+  const std::string correspondences_path = folder.Path("correspondences.json");
+  const Mesh reference = ReadMesh(reference_path);
+  const Correspondences correspondences = ReadCorrespondences(correspondences_path);
+  const double factor_start = NowSeconds();
+  ConfluentMotion motion(scan, reference, correspondences, {}, inputs.scan_path, correspondences_path);
+  timings->Add("deform_factor", -1, NowSeconds() - factor_start);
+  fs::create_directories(folder.Path("scan"));
+
+  auto template_vertices = [&](int frame) {
+    const std::string path = folder.TemplatePath(frame);
+    if (!fs::exists(path)) throw InputError(path, "posed template missing (the tracking stage did not finish this frame)");
+    Mesh posed = ReadMesh(path);
+    if (posed.vertices.rows() != reference.vertices.rows())
+      throw InputError(path, "the template has " + std::to_string(posed.vertices.rows()) + " vertices, the reference " +
+                                 std::to_string(reference.vertices.rows()));
+    return posed.vertices;
+  };
+  int done = 0;
+  int previous = -2;
+  std::vector<int> singular_frames;
+  for (int frame : todo) {
+    // Sign consistency and the intermediate reference follow the previous frame: replay it when
+    // this invocation starts in the middle of the sequence.
+    if (previous != frame - 1 && frame > 0 && fs::exists(folder.TemplatePath(frame - 1))) motion.Deform(template_vertices(frame - 1));
+    const double frame_start = NowSeconds();
+    DeformSummary summary;
+    Mesh animated = scan;
+    animated.vertices = motion.Deform(template_vertices(frame), &summary);
+    WriteMesh(folder.ScanPath(frame), animated);
+    timings->Add("deform", frame, NowSeconds() - frame_start);
+    if (summary.singular) singular_frames.push_back(frame);
+    previous = frame;
+    ++report.computed;
+    ReportProgress(progress, "deform", ++done, todo.size(), "frame " + std::to_string(frame));
+  }
+  if (!singular_frames.empty())
+    report.notes.push_back(std::to_string(singular_frames.size()) +
+                           " frame(s) near a 180-degree rotation used an intermediate reference (report section 4.3), frames " +
+                           std::to_string(singular_frames.front()) + " to " + std::to_string(singular_frames.back()));
+  timings->Save();
+  report.seconds = NowSeconds() - start;
+  return report;
+}
+
+namespace {
+
+// A point the orbit looks at: the centre of the used cameras' ring, at mid-body height.
+Eigen::Vector3d RingCentre(const std::vector<Camera>& cameras) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const Camera& camera : cameras) sum += camera.center_in_world();
+  Eigen::Vector3d centre = sum / std::max<std::size_t>(1, cameras.size());
+  centre.z() = 0.95;
+  return centre;
+}
+
+}  // namespace
+
+StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& options, const ProgressCallback& progress,
+                           TimingLog* timings) {
+  StageReport report("render");
+  const double start = NowSeconds();
+  const RunFolder& folder = inputs.folder;
+  const Capture& capture = *inputs.capture;
+  const Rig& rig = capture.rig();
+  const bool use_scan = !inputs.scan_path.empty();
+  auto geometry_path = [&](int frame) { return use_scan ? folder.ScanPath(frame) : folder.TemplatePath(frame); };
+
+  std::vector<int> used;
+  std::vector<Camera> used_cameras;
+  for (int c = 0; c < rig.size(); ++c)
+    if (!inputs.excluded[c]) {
+      used.push_back(c);
+      used_cameras.push_back(rig.cameras[c]);
+    }
+  OrbitPathOptions orbit = OrbitAroundCameras(used_cameras, RingCentre(used_cameras));
+  orbit.num_frames = capture.num_frames();  // the whole capture is one turn, so shards agree
+  orbit.width_px = options.width;
+  orbit.height_px = options.height;
+  const std::vector<Camera> path = OrbitPath(orbit);
+
+  std::vector<int> todo;
+  for (int frame = inputs.frames.first; frame < inputs.frames.end; ++frame) {
+    if (fs::exists(folder.RenderPath(options.view, frame))) {
+      ++report.skipped;
+    } else if (!fs::exists(geometry_path(frame))) {
+      report.notes.push_back("missing geometry, frame not rendered: " + geometry_path(frame));
+    } else {
+      todo.push_back(frame);
+    }
+  }
+  if (!todo.empty()) {
+    const Mesh first_mesh = ReadMesh(geometry_path(todo.front()));
+    const Mesh colours = use_scan ? ReadMesh(inputs.scan_path) : first_mesh;
+    Mesh textured = first_mesh;
+    textured.colors = colours.colors;
+    ProjectiveTexturer texturer(textured);
+    fs::create_directories(folder.Path("renders/" + options.view));
+    int done = 0;
+    for (int frame : todo) {
+      const double frame_start = NowSeconds();
+      const Mesh mesh = ReadMesh(geometry_path(frame));
+      std::vector<Image> images, masks;
+      for (int c : used) {
+        images.push_back(capture.ReadFrame(c, frame));
+        const std::string mask_path = RunMaskPath(inputs, c, frame);
+        masks.push_back(fs::exists(mask_path) ? ReadMaskFile(mask_path) : Image());
+      }
+      texturer.SetFrame(mesh.vertices, used_cameras, images, masks);
+      const RenderResult result = texturer.Render(path[frame]);
+      WriteImage(folder.RenderPath(options.view, frame), result.color);
+      timings->Add("render", frame, NowSeconds() - frame_start);
+      ++report.computed;
+      ReportProgress(progress, "render", ++done, todo.size(), "frame " + std::to_string(frame));
+    }
+    timings->Save();
+  }
+  // The video over every rendered frame of the capture, in order.
+  std::vector<std::string> frames;
+  for (int frame = 0; frame < capture.num_frames(); ++frame)
+    if (fs::exists(folder.RenderPath(options.view, frame))) frames.push_back(folder.RenderPath(options.view, frame));
+  if (static_cast<int>(frames.size()) < capture.num_frames())
+    report.notes.push_back(std::to_string(capture.num_frames() - frames.size()) + " frame(s) of the capture not rendered yet");
+  const std::string video = folder.VideoPath(options.view);
+  if (!frames.empty() && (report.computed > 0 || !fs::exists(video))) {
+    VideoWriterOptions video_options;
+    video_options.fps = options.fps;
+    if (!FfmpegAvailable(video_options)) {
+      report.notes.push_back("ffmpeg not found: no " + video + " (the PNG frames are written)");
+    } else {
+      const double video_start = NowSeconds();
+      VideoWriter writer(video, options.width, options.height, video_options);
+      for (const std::string& file : frames) writer.Write(ReadImage(file));
+      writer.Close();
+      timings->Add("video", -1, NowSeconds() - video_start);
+      report.notes.push_back("video: " + video + " (" + std::to_string(frames.size()) + " frames)");
+    }
+  }
+  timings->Save();
+  report.seconds = NowSeconds() - start;
+  return report;
+}
+
+}  // namespace confluent::app

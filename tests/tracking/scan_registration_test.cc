@@ -1,0 +1,253 @@
+// Registration of the template to scans (issue 7): known shape and pose recovered from a
+// differently tessellated template-like scan, in any orientation; non-human scans refused;
+// correspondence placement on the (low-resolution) studio actor; the registration's JSON.
+
+#include "tracking/scan_registration.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+
+#include "core/body_segments.h"
+#include "core/error.h"
+#include "core/mesh_ops.h"
+#include "deform/correspondence_placement.h"
+#include "render/studio_actor.h"
+#include "tests/support/test_support.h"
+#include "tracking/pose_from_joints.h"
+
+namespace confluent {
+namespace {
+
+using Eigen::Vector3d;
+
+BodyShape KnownShape() {
+  BodyShape shape = BodyShape::Uniform(1.68);
+  shape.length_scale[int(BodySegment::kLeftThigh)] *= 1.06;
+  shape.length_scale[int(BodySegment::kRightThigh)] *= 1.06;
+  shape.girth_scale[int(BodySegment::kUpperTorso)] *= 1.1;
+  shape.girth_scale[int(BodySegment::kLowerTorso)] *= 1.1;
+  return shape;
+}
+
+TemplatePose KnownPose() {
+  TemplatePose pose;
+  pose.root_translation = Vector3d(0.4, -0.3, 0.0);
+  pose.root_rotation = Vector3d(0, 0, 0.6);
+  pose.dofs[kTjLeftElbow] = {0.5, 0, 0};
+  pose.dofs[kTjRightElbow] = {0.3, 0, 0};
+  pose.dofs[kTjLeftHip] = {0.25, 0, 0};
+  pose.dofs[kTjLeftKnee] = {-0.4, 0, 0};
+  pose.dofs[kTjSpine] = {0.1, 0, 0.1};
+  return pose;
+}
+
+// A template-like scan: the template with a finer tessellation (20 steps around instead of
+// 12), shape and pose known, moved by `scan_from_world`.
+Mesh TemplateLikeScan(const Eigen::Isometry3d& scan_from_world) {
+  const BodyTemplate fine(20);
+  Mesh scan = fine.PosedMesh(KnownShape(), KnownPose());
+  for (int v = 0; v < scan.num_vertices(); ++v)
+    scan.vertices.row(v) = (scan_from_world * Vector3d(scan.vertices.row(v).transpose())).transpose();
+  scan.face_labels.clear();
+  return scan;
+}
+
+// Mean distance between the registered and the true joints (scan frame).
+double MeanJointError(const BodyTemplate& body, const ScanRegistration& registration, const Eigen::Isometry3d& scan_from_world) {
+  const auto fitted = body.JointPositions(registration.shape, registration.pose);
+  const auto truth = body.JointPositions(KnownShape(), KnownPose());
+  double sum = 0;
+  int n = 0;
+  for (int j = 0; j < kNumTemplateJoints; ++j) {
+    if (j == kTjHeadEnd || j == kTjLeftHandEnd || j == kTjRightHandEnd || j == kTjLeftToe || j == kTjRightToe) continue;
+    sum += (fitted[j] - scan_from_world * truth[j]).norm();
+    ++n;
+  }
+  return sum / n;
+}
+
+TEST(ScanRegistration, RecoversKnownShapeAndPoseOfATemplateLikeScan) {
+  const BodyTemplate body;
+  const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+  const ScanRegistration registration = RegisterTemplateToScan(body, TemplateLikeScan(identity));
+  EXPECT_LT(MeanJointError(body, registration, identity), 0.02);
+  EXPECT_LT(registration.trimmed_rms_residual_m, 0.01);
+  EXPECT_NEAR(registration.shape.length_scale[int(BodySegment::kLeftThigh)], KnownShape().length_scale[int(BodySegment::kLeftThigh)], 0.06);
+  EXPECT_NEAR(registration.up_in_scan.z(), 1.0, 0.02);
+  EXPECT_DOUBLE_EQ(registration.metres_per_unit, 1.0);
+}
+
+TEST(ScanRegistration, UpsideDownScanIsReorientedAndSaysSo) {
+  const BodyTemplate body;
+  Eigen::Isometry3d flip = Eigen::Isometry3d::Identity();
+  flip.linear() = Eigen::AngleAxisd(M_PI, Vector3d::UnitX()).toRotationMatrix();
+  flip.translation() = Vector3d(0, 0, 2.0);
+  const ScanRegistration registration = RegisterTemplateToScan(body, TemplateLikeScan(flip));
+  EXPECT_LT(MeanJointError(body, registration, flip), 0.02);
+  EXPECT_LT(registration.up_in_scan.z(), -0.95);
+  bool said = false;
+  for (const std::string& w : registration.warnings) said = said || w.find("upside down") != std::string::npos;
+  EXPECT_TRUE(said);
+  // Refused when re-orientation is not allowed.
+  ScanRegistrationOptions strict;
+  strict.allow_reorientation = false;
+  EXPECT_THROW(RegisterTemplateToScan(body, TemplateLikeScan(flip), strict, "flipped.ply"), InputError);
+}
+
+TEST(ScanRegistration, ScanLyingOnItsSideInDecimetresIsHandled) {
+  const BodyTemplate body;
+  Eigen::Isometry3d side = Eigen::Isometry3d::Identity();
+  side.linear() = 10.0 * Eigen::AngleAxisd(-M_PI / 2, Vector3d::UnitX()).toRotationMatrix();  // Y up, decimetres
+  const ScanRegistration registration = RegisterTemplateToScan(body, TemplateLikeScan(side));
+  EXPECT_DOUBLE_EQ(registration.metres_per_unit, 0.1);
+  EXPECT_GT(registration.up_in_scan.y(), 0.95);
+  EXPECT_LT(MeanJointError(body, registration, side), 0.2);  // 2 cm in decimetres
+}
+
+TEST(ScanRegistration, TPoseScanWithHolesAndASeparateHairPiece) {
+  const BodyTemplate body;
+  const BodyTemplate fine(20);
+  // T-pose: upper arms horizontal (rotation about the forward axis), elbows straight.
+  TemplatePose pose;
+  pose.root_translation = Vector3d(-0.2, 0.1, 0.0);
+  pose.dofs[kTjLeftShoulder] = {0.0, 50.0 * M_PI / 180.0, 0.0};
+  pose.dofs[kTjRightShoulder] = {0.0, -50.0 * M_PI / 180.0, 0.0};
+  const BodyShape shape = BodyShape::Uniform(1.8);
+  const Mesh posed = fine.PosedMesh(shape, pose);
+  const auto truth = fine.JointPositions(shape, pose);
+  ASSERT_NEAR(truth[kTjLeftElbow].z(), truth[kTjLeftShoulder].z(), 0.03);  // really a T-pose
+  // Holes: drop every face whose centroid lies in a band around the belly or on the left shin.
+  Mesh scan;
+  scan.vertices = posed.vertices;
+  std::vector<Eigen::Vector3i> faces;
+  for (int f = 0; f < posed.num_faces(); ++f) {
+    const Vector3d c = (posed.vertices.row(posed.faces(f, 0)) + posed.vertices.row(posed.faces(f, 1)) +
+                        posed.vertices.row(posed.faces(f, 2))).transpose() / 3.0;
+    const bool belly = c.z() > 1.05 && c.z() < 1.1 && c.y() > 0.0;
+    const bool shin = c.x() < 0 && c.z() > 0.25 && c.z() < 0.3;
+    if (!belly && !shin) faces.push_back(posed.faces.row(f).transpose());
+  }
+  // A separate hair piece: a flat box on top of the head.
+  const Mesh hair = MakeBox(truth[kTjHeadEnd] + Vector3d(-0.09, -0.1, -0.02), truth[kTjHeadEnd] + Vector3d(0.09, 0.06, 0.03));
+  const int offset = scan.num_vertices();
+  scan.vertices.conservativeResize(offset + hair.num_vertices(), 3);
+  scan.vertices.bottomRows(hair.num_vertices()) = hair.vertices;
+  for (int f = 0; f < hair.num_faces(); ++f) faces.push_back(hair.faces.row(f).transpose() + Eigen::Vector3i::Constant(offset));
+  ASSERT_LT(static_cast<int>(faces.size()), posed.num_faces());
+  scan.faces.resize(faces.size(), 3);
+  for (std::size_t f = 0; f < faces.size(); ++f) scan.faces.row(f) = faces[f].transpose();
+
+  const ScanRegistration registration = RegisterTemplateToScan(body, scan);
+  const auto fitted = body.JointPositions(registration.shape, registration.pose);
+  for (int j : {int(kTjLeftElbow), int(kTjRightElbow), int(kTjLeftWrist), int(kTjRightWrist), int(kTjLeftKnee), int(kTjHead)})
+    EXPECT_LT((fitted[j] - truth[j]).norm(), 0.04) << body.joint_names()[j];
+}
+
+TEST(ScanRegistration, SphereIsRefusedWithTheResidual) {
+  const BodyTemplate body;
+  const Mesh sphere = MakeUvSphere(0.8, 24, 48);
+  try {
+    RegisterTemplateToScan(body, sphere, {}, "sphere.ply");
+    FAIL() << "a sphere was accepted as a human scan";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("sphere.ply"), std::string::npos) << what;
+    EXPECT_NE(what.find("residual"), std::string::npos) << what;
+  }
+}
+
+TEST(ScanRegistration, RegistrationRoundTripsThroughCorrespondencesJson) {
+  const BodyTemplate body;
+  testing::TempDir dir;
+  const std::string path = dir / "c.json";
+  std::ofstream(path) << "{\"pairs\": [{\"template_triangle\": 1, \"scan_triangle\": 2}]}";
+  EXPECT_THROW(ReadTemplateRegistration(path, body), InputError);
+  ScanRegistration registration;
+  registration.shape = KnownShape();
+  registration.pose = KnownPose();
+  registration.rms_residual_m = 0.012;
+  WriteTemplateRegistration(path, body, registration);
+  const ScanRegistration back = ReadTemplateRegistration(path, body);
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    EXPECT_DOUBLE_EQ(back.shape.length_scale[s], registration.shape.length_scale[s]);
+    EXPECT_DOUBLE_EQ(back.shape.girth_scale[s], registration.shape.girth_scale[s]);
+  }
+  EXPECT_TRUE(back.pose.root_translation.isApprox(registration.pose.root_translation));
+  EXPECT_DOUBLE_EQ(back.pose.dofs[kTjLeftElbow][0], 0.5);
+  EXPECT_DOUBLE_EQ(back.rms_residual_m, 0.012);
+}
+
+TEST(PoseFromJoints, RecoversAPoseFromItsJointsAndRotations) {
+  const BodyTemplate body;
+  const BodyShape shape = KnownShape();
+  TemplatePose truth = KnownPose();
+  truth.dofs[kTjHead] = {0.1, 0.0, 0.5};  // a head turn: only observable through the rotations
+  const std::vector<Vector3d> joints = body.JointPositions(shape, truth);
+  const auto world = WorldFromJoint(body.MakeSkeleton(shape), body.ToPose(truth));
+  std::vector<Eigen::Quaterniond> rotations;
+  for (const auto& t : world) rotations.emplace_back(t.linear());
+  const TemplatePose fitted = FitPoseToJoints(body, shape, joints, &rotations, TemplatePose());
+  const std::vector<Vector3d> again = body.JointPositions(shape, fitted);
+  for (int j = 0; j < kNumTemplateJoints; ++j) EXPECT_LT((again[j] - joints[j]).norm(), 1e-4) << j;
+  EXPECT_NEAR(fitted.dofs[kTjHead][2], 0.5, 1e-3);
+}
+
+TEST(CorrespondencePlacement, StudioActorGets140To220PairsOnAll16Segments) {
+  StudioActorOptions actor_options;
+  actor_options.target_triangles = 12000;
+  const StudioActor actor = BuildStudioActor(actor_options);
+  const BodyTemplate body;
+  const ScanRegistration registration = RegisterTemplateToScan(body, actor.mesh);
+  EXPECT_LT(registration.trimmed_rms_residual_m, 0.02);
+  // The studio actor's rest skeleton is the template's generic one: joints should agree.
+  const auto joints = body.JointPositions(registration.shape, registration.pose);
+  const auto truth = actor.skeleton.RestPositions();
+  EXPECT_LT((joints[kTjLeftElbow] - truth[kTjLeftElbow]).norm(), 0.05);
+  EXPECT_LT((joints[kTjRightKnee] - truth[kTjRightKnee]).norm(), 0.05);
+
+  const Mesh template_mesh = body.PosedMesh(registration.shape, registration.pose);
+  CorrespondencePlacementOptions options;
+  options.joint_positions = joints;
+  const Correspondences pairs = PlaceCorrespondences(template_mesh, actor.mesh, options);
+  EXPECT_GE(pairs.pairs.size(), 140u);
+  EXPECT_LE(pairs.pairs.size(), 220u);
+  ValidateCorrespondences(pairs, template_mesh.num_faces(), actor.mesh.num_faces(), "placed");
+  std::set<std::string> segments;
+  const RowMatrixX3d template_normals = FaceNormals(template_mesh), scan_normals = FaceNormals(actor.mesh);
+  for (const CorrespondencePair& p : pairs.pairs) {
+    segments.insert(p.segment);
+    EXPECT_EQ(BodySegmentName(template_mesh.face_labels[p.template_triangle]), p.segment);
+    EXPECT_GT(template_normals.row(p.template_triangle).dot(scan_normals.row(p.scan_triangle)), 0.5);
+    // The scan triangle lies on the same body part: its label in the actor agrees.
+    const int scan_label = actor.mesh.face_labels[p.scan_triangle];
+    const int template_label = template_mesh.face_labels[p.template_triangle];
+    const bool left_t = BodySegmentName(template_label).rfind("left", 0) == 0;
+    const bool right_s = BodySegmentName(scan_label).rfind("right", 0) == 0;
+    EXPECT_FALSE(left_t && right_s) << p.segment << " paired with " << BodySegmentName(scan_label);
+  }
+  EXPECT_EQ(segments.size(), static_cast<std::size_t>(kNumBodySegments));
+  // Markers keep the clearance from the joints at the ends of the limbs (along the limb).
+  const Vector3d elbow = joints[kTjLeftElbow], shoulder = joints[kTjLeftShoulder];
+  const Vector3d axis = (elbow - shoulder).normalized();
+  for (const CorrespondencePair& p : pairs.pairs) {
+    if (p.segment != "left_upper_arm") continue;
+    const Vector3d c = (template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 0)) +
+                        template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 1)) +
+                        template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 2))).transpose() / 3.0;
+    EXPECT_GE(std::abs((c - elbow).dot(axis)), options.joint_clearance_m - 1e-9);
+  }
+  // A partial manual file is kept and completed.
+  Correspondences manual;
+  manual.pairs.push_back(pairs.pairs[0]);
+  manual.pairs[0].segment.clear();
+  const Correspondences completed = PlaceCorrespondences(template_mesh, actor.mesh, options, &manual);
+  ASSERT_GE(completed.pairs.size(), 140u);
+  EXPECT_EQ(completed.pairs[0].template_triangle, pairs.pairs[0].template_triangle);
+  EXPECT_EQ(completed.pairs[0].segment, pairs.pairs[0].segment);
+}
+
+}  // namespace
+}  // namespace confluent

@@ -1,0 +1,985 @@
+// Template-to-scan registration and pose-from-joints fitting: the one translation unit with the
+// Ceres cost functors of both (they compile slowly).
+
+#include "tracking/scan_registration.h"
+
+#include <ceres/ceres.h>
+#include <ceres/normal_prior.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <random>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/mesh_ops.h"
+#include "tracking/body_model_impl.h"
+#include "tracking/pose_from_joints.h"
+
+namespace confluent {
+
+namespace ti = tracking_internal;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+void ScanRegistrationOptions::Check() const {
+  if (num_scan_samples < 100 || num_scan_residuals < 50) throw UsageError("registration: too few scan samples");
+  if (rounds < 1 || max_iterations < 1) throw UsageError("registration: rounds and max_iterations must be >= 1");
+  if (!(min_pair_distance_m > 0) || !(max_pair_distance_m >= min_pair_distance_m))
+    throw UsageError("registration: pair distances must be positive, max >= min");
+  if (!(max_normal_angle_deg > 0 && max_normal_angle_deg <= 180)) throw UsageError("registration: max_normal_angle_deg in (0, 180]");
+  if (!(loss_scale_m > 0) || !(prior_weight >= 0) || !(shape_prior_weight >= 0))
+    throw UsageError("registration: loss scale must be positive and weights non-negative");
+  if (!(max_residual_fraction > 0) || !(reference_pose_tolerance_deg > 0))
+    throw UsageError("registration: max_residual_fraction and reference_pose_tolerance_deg must be positive");
+  if (num_threads < 1) throw UsageError("registration: num_threads must be >= 1");
+}
+
+void PoseFromJointsOptions::Check() const {
+  if (!(rotation_weight_m >= 0) || max_iterations < 1) throw UsageError("pose from joints: bad options");
+}
+
+namespace {
+
+constexpr int kShapeBlockSize = 2 * ti::kNumShapeGroups;
+
+// ---------------------------------------------------------------------------------------------
+// Nearest-neighbour queries on scan samples: a static k-d tree.
+class KdTree {
+ public:
+  explicit KdTree(const std::vector<Vector3d>* points) : points_(points) {
+    index_.resize(points->size());
+    std::iota(index_.begin(), index_.end(), 0);
+    if (!index_.empty()) root_ = Build(0, static_cast<int>(index_.size()));
+  }
+
+  // Index of the nearest point, or -1 when empty; `distance2` its squared distance.
+  int Nearest(const Vector3d& q, double* distance2) const {
+    int best = -1;
+    double best_d2 = std::numeric_limits<double>::infinity();
+    if (root_ >= 0) Search(root_, q, &best, &best_d2);
+    *distance2 = best_d2;
+    return best;
+  }
+
+ private:
+  struct Node {
+    int begin, end, axis = -1, left = -1, right = -1;
+    double split = 0;
+  };
+
+  int Build(int begin, int end) {
+    Node node{begin, end};
+    const int id = static_cast<int>(nodes_.size());
+    nodes_.push_back(node);
+    if (end - begin <= 8) return id;
+    Eigen::AlignedBox3d box;
+    for (int i = begin; i < end; ++i) box.extend((*points_)[index_[i]]);
+    int axis;
+    box.sizes().maxCoeff(&axis);
+    const int mid = (begin + end) / 2;
+    std::nth_element(index_.begin() + begin, index_.begin() + mid, index_.begin() + end,
+                     [&](int a, int b) { return (*points_)[a][axis] < (*points_)[b][axis]; });
+    nodes_[id].axis = axis;
+    nodes_[id].split = (*points_)[index_[mid]][axis];
+    const int left = Build(begin, mid);
+    const int right = Build(mid, end);
+    nodes_[id].left = left;
+    nodes_[id].right = right;
+    return id;
+  }
+
+  void Search(int id, const Vector3d& q, int* best, double* best_d2) const {
+    const Node& node = nodes_[id];
+    if (node.axis < 0) {
+      for (int i = node.begin; i < node.end; ++i) {
+        const double d2 = ((*points_)[index_[i]] - q).squaredNorm();
+        if (d2 < *best_d2) {
+          *best_d2 = d2;
+          *best = index_[i];
+        }
+      }
+      return;
+    }
+    const double delta = q[node.axis] - node.split;
+    const int first = delta < 0 ? node.left : node.right, second = delta < 0 ? node.right : node.left;
+    Search(first, q, best, best_d2);
+    if (delta * delta < *best_d2) Search(second, q, best, best_d2);
+  }
+
+  const std::vector<Vector3d>* points_;
+  std::vector<int> index_;
+  std::vector<Node> nodes_;
+  int root_ = -1;
+};
+
+// Area-uniform samples of the scan surface with their face normals.
+struct ScanSamples {
+  std::vector<Vector3d> points, normals;
+  double spacing = 0.0;  // typical distance between neighbouring samples
+};
+
+ScanSamples SampleScan(const Mesh& scan, int count, bool flip_normals) {
+  const RowMatrixX3d cross = FaceCrossProducts(scan);
+  std::vector<double> cumulative;
+  cumulative.reserve(scan.num_faces());
+  double total = 0.0;
+  for (int f = 0; f < scan.num_faces(); ++f) {
+    const double a = cross.row(f).norm();
+    total += std::isfinite(a) ? a : 0.0;
+    cumulative.push_back(total);
+  }
+  ScanSamples samples;
+  if (!(total > 0)) return samples;
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (int i = 0; i < count; ++i) {
+    const double r = (i + uniform(rng)) / count * total;  // stratified over the area
+    int f = static_cast<int>(std::lower_bound(cumulative.begin(), cumulative.end(), r) - cumulative.begin());
+    f = std::min(f, scan.num_faces() - 1);
+    double u = uniform(rng), v = uniform(rng);
+    if (u + v > 1) {
+      u = 1 - u;
+      v = 1 - v;
+    }
+    const Vector3d a = scan.vertices.row(scan.faces(f, 0)), b = scan.vertices.row(scan.faces(f, 1)),
+                   c = scan.vertices.row(scan.faces(f, 2));
+    const double norm = cross.row(f).norm();
+    if (!(norm > 0)) continue;
+    samples.points.push_back(a + u * (b - a) + v * (c - a));
+    samples.normals.push_back(cross.row(f).transpose() / norm * (flip_normals ? -1.0 : 1.0));
+  }
+  samples.spacing = std::sqrt(0.5 * total / std::max<std::size_t>(1, samples.points.size()));
+  return samples;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parameters and the template's segments in the world.
+
+struct FitParams {
+  double root_t[3] = {0, 0, 0};
+  double root_aa[3] = {0, 0, 0};
+  Matrix3d root_reference = Matrix3d::Identity();
+  std::array<std::array<double, 3>, kNumTemplateJoints> dofs{};
+  double shape[kShapeBlockSize];
+};
+
+void ShapeArrays(const double* shape, double* length, double* girth) {
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    length[s] = shape[ti::kSegmentGroup[s]];
+    girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
+  }
+}
+
+void ShapeToParams(const BodyShape& shape, double* params) {
+  for (int g = 0; g < ti::kNumShapeGroups; ++g) {
+    double l = 0, gi = 0;
+    int n = 0;
+    for (int s = 0; s < kNumBodySegments; ++s)
+      if (ti::kSegmentGroup[s] == g) {
+        l += shape.length_scale[s];
+        gi += shape.girth_scale[s];
+        ++n;
+      }
+    params[g] = l / n;
+    params[ti::kNumShapeGroups + g] = gi / n;
+  }
+}
+
+BodyShape ParamsToShape(const double* params) {
+  BodyShape shape;
+  ShapeArrays(params, shape.length_scale.data(), shape.girth_scale.data());
+  return shape;
+}
+
+TemplatePose ParamsToPose(const FitParams& fp) {
+  TemplatePose pose;
+  const Eigen::AngleAxisd aa(Matrix3d(ti::AngleAxisMatrix(fp.root_aa) * fp.root_reference));
+  pose.root_rotation = aa.angle() * aa.axis();
+  pose.root_translation = Vector3d(fp.root_t[0], fp.root_t[1], fp.root_t[2]);
+  pose.dofs = fp.dofs;
+  return pose;
+}
+
+void PoseToParams(const TemplatePose& pose, FitParams* fp) {
+  for (int k = 0; k < 3; ++k) fp->root_t[k] = pose.root_translation[k];
+  fp->root_aa[0] = fp->root_aa[1] = fp->root_aa[2] = 0.0;
+  fp->root_reference = ti::AngleAxisMatrix(pose.root_rotation.data());
+  fp->dofs = pose.dofs;
+}
+
+struct SegmentWorld {
+  ti::SegmentFrame<double> frame;
+  Vector3d a, axis, e1, e2;
+  Matrix3d R;
+  Vector3d P;
+};
+
+std::array<SegmentWorld, kNumBodySegments> SegmentsInWorld(const BodyTemplate& body, const FitParams& fp) {
+  double length[kNumBodySegments], girth[kNumBodySegments];
+  ShapeArrays(fp.shape, length, girth);
+  std::array<Vector3d, kNumTemplateJoints> rest;
+  ti::RestPositions(body, length, girth, &rest);
+  const double* jp[kNumTemplateJoints];
+  for (int j = 0; j < kNumTemplateJoints; ++j) jp[j] = fp.dofs[j].data();
+  std::array<SegmentWorld, kNumBodySegments> out;
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    SegmentWorld& w = out[s];
+    const int joint = body.segments()[s].joint;
+    ti::JointWorldTransform(body, joint, rest, fp.root_t, fp.root_aa, fp.root_reference, jp, &w.R, &w.P);
+    w.frame = ti::MakeSegmentFrame(body, s, rest, length, girth);
+    w.a = w.P + w.R * (w.frame.a - rest[joint]);
+    w.axis = w.R * w.frame.axis;
+    w.e1 = w.R * w.frame.e1;
+    w.e2 = w.R * w.frame.e2;
+  }
+  return out;
+}
+
+// Approximate signed distance of a point to a segment capsule (negative inside) from its
+// normalised capsule coordinates; `normal` receives the outward direction.
+template <typename T>
+T CapsuleDistance(const ti::SegmentFrame<T>& f, const ti::Vec3<T>& a, const ti::Vec3<T>& axis, const ti::Vec3<T>& e1,
+                  const ti::Vec3<T>& e2, const ti::Vec3<T>& p, ti::Vec3<T>* normal) {
+  using std::sqrt;
+  const ti::Vec3<T> o = p - a;
+  const T oz = o.dot(axis), ox = o.dot(e1), oy = o.dot(e2);
+  T s = oz;
+  if (s < T(0.0)) s = T(0.0);
+  if (s > f.length) s = f.length;
+  const T frac = s / f.length;
+  const T rx = f.rax + (f.rbx - f.rax) * frac, ry = f.ray + (f.rby - f.ray) * frac;
+  const T over = oz - s;
+  const T cap = over < T(0.0) ? f.cap_a : f.cap_b;
+  const T qx = ox / rx, qy = oy / ry, qz = over / cap;
+  const T nq = sqrt(qx * qx + qy * qy + qz * qz + T(1e-12));
+  if (normal) {
+    const ti::Vec3<T> g = e1 * (qx / rx) + e2 * (qy / ry) + axis * (qz / cap);
+    *normal = g / sqrt(g.squaredNorm() + T(1e-24));
+  }
+  // Scale: the local radius in the direction of the point.
+  const T radius = (over != T(0.0)) ? (rx + ry + cap) / T(3.0) : (rx + ry) / T(2.0);
+  return (nq - T(1.0)) * radius;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The Ceres cost of one segment: template points -> paired scan samples (point-to-plane plus a
+// weak tangential term) and scan samples -> the segment's capsule. Parameter blocks: root
+// translation (3), root rotation vector (3), the DOF blocks of the joints on the segment's chain,
+// then the shape block (20).
+struct SurfaceCost {
+  const BodyTemplate* body = nullptr;
+  int segment = 0;
+  Matrix3d root_reference = Matrix3d::Identity();
+  std::vector<int> chain_joints;
+  std::vector<SurfaceCoord> model_coords;       // template surface points paired with scan samples
+  std::vector<Vector3d> targets, target_normals, tangent1, tangent2;
+  std::vector<double> model_weights;
+  std::vector<Vector3d> scan_points;            // scan samples paired with this segment
+  std::vector<double> scan_weights;
+  double tangential_weight = 0.3;
+
+  int num_residuals() const { return static_cast<int>(3 * model_coords.size() + scan_points.size()); }
+
+  template <typename T>
+  bool operator()(T const* const* p, T* residuals) const {
+    const T* jp[kNumTemplateJoints] = {};
+    for (std::size_t i = 0; i < chain_joints.size(); ++i) jp[chain_joints[i]] = p[2 + i];
+    const T* shape = p[2 + chain_joints.size()];
+    T length[kNumBodySegments], girth[kNumBodySegments];
+    for (int s = 0; s < kNumBodySegments; ++s) {
+      length[s] = shape[ti::kSegmentGroup[s]];
+      girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
+    }
+    std::array<ti::Vec3<T>, kNumTemplateJoints> rest;
+    ti::RestPositions(*body, length, girth, &rest);
+    const ti::SegmentFrame<T> frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth);
+    const int joint = body->segments()[segment].joint;
+    ti::Mat3<T> R;
+    ti::Vec3<T> P;
+    ti::JointWorldTransform(*body, joint, rest, p[0], p[1], root_reference, jp, &R, &P);
+    int r = 0;
+    for (std::size_t i = 0; i < model_coords.size(); ++i) {
+      const ti::Vec3<T> X = P + R * (frame.Point(model_coords[i]) - rest[joint]);
+      const ti::Vec3<T> d = X - targets[i].cast<T>();
+      const T w(model_weights[i]);
+      residuals[r++] = w * d.dot(target_normals[i].cast<T>());
+      residuals[r++] = w * T(tangential_weight) * d.dot(tangent1[i].cast<T>());
+      residuals[r++] = w * T(tangential_weight) * d.dot(tangent2[i].cast<T>());
+    }
+    if (!scan_points.empty()) {
+      const ti::Vec3<T> a = P + R * (frame.a - rest[joint]);
+      const ti::Vec3<T> axis = R * frame.axis, e1 = R * frame.e1, e2 = R * frame.e2;
+      for (std::size_t i = 0; i < scan_points.size(); ++i)
+        residuals[r++] =
+            T(scan_weights[i]) * CapsuleDistance<T>(frame, a, axis, e1, e2, scan_points[i].cast<T>(), nullptr);
+    }
+    return true;
+  }
+};
+
+// The joints with DOFs on the chain from the root to each segment's joint, root first.
+std::array<std::vector<int>, kNumBodySegments> SegmentChains(const BodyTemplate& body) {
+  std::array<std::vector<int>, kNumBodySegments> chains;
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    std::vector<int> chain;
+    for (int j = body.segments()[s].joint; j > 0; j = body.parents()[j])
+      if (body.dofs()[j].type != JointType::kFixed) chain.push_back(j);
+    std::reverse(chain.begin(), chain.end());
+    chains[s] = chain;
+  }
+  return chains;
+}
+
+// One round's pairs and residual statistics.
+struct Pairing {
+  std::array<SurfaceCost, kNumBodySegments> costs;
+  std::vector<double> distances;                       // all accepted distances (both directions)
+  std::array<std::vector<double>, kNumBodySegments> segment_distances;  // template -> scan
+  std::array<std::vector<Vector3d>, kNumBodySegments> scan_points;      // scan samples per segment
+  double rms = 0.0, trimmed_rms = 0.0;
+  int num_pairs = 0;
+};
+
+double Rms(std::vector<double> d, double keep_fraction) {
+  if (d.empty()) return std::numeric_limits<double>::infinity();
+  std::sort(d.begin(), d.end());
+  const std::size_t n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(keep_fraction * d.size())));
+  double sum = 0;
+  for (std::size_t i = 0; i < n; ++i) sum += d[i] * d[i];
+  return std::sqrt(sum / n);
+}
+
+// Pairs the template (at `fp`) with the scan. `max_distance` limits pairs (infinity: every
+// template point and scan sample is paired, for the final statistics).
+Pairing MakePairs(const BodyTemplate& body, const FitParams& fp, const ScanSamples& samples, const KdTree& tree,
+                  const std::vector<int>& residual_samples, double max_distance, double min_cos, double loss_scale) {
+  Pairing pairing;
+  const auto segments = SegmentsInWorld(body, fp);
+  const Mesh mesh = body.PosedMesh(ParamsToShape(fp.shape), ParamsToPose(fp));
+  const RowMatrixX3d normals = VertexNormals(mesh);
+  const int nv = static_cast<int>(body.mesh_coords().size());
+  const bool unlimited = !std::isfinite(max_distance);
+  auto huber = [&](double d) { return std::abs(d) <= loss_scale ? 1.0 : std::sqrt(loss_scale / std::abs(d)); };
+  for (int s = 0; s < kNumBodySegments; ++s) pairing.costs[s].segment = s;
+  // Template -> scan.
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    SurfaceCost& cost = pairing.costs[s];
+    for (int v = 0; v < nv; ++v) {
+      const Vector3d X = mesh.vertices.row(s * nv + v);
+      const Vector3d n = normals.row(s * nv + v);
+      // Skip points inside another segment (the overlaps at the joints).
+      bool inside = false;
+      for (int o = 0; o < kNumBodySegments && !inside; ++o) {
+        if (o == s) continue;
+        const SegmentWorld& w = segments[o];
+        inside = CapsuleDistance<double>(w.frame, w.a, w.axis, w.e1, w.e2, X, nullptr) < 0.0;
+      }
+      if (inside) continue;
+      double d2;
+      const int nearest = tree.Nearest(X, &d2);
+      if (nearest < 0) continue;
+      const Vector3d& q = samples.points[nearest];
+      const Vector3d& nq = samples.normals[nearest];
+      const Vector3d d = X - q;
+      double distance = std::sqrt(d2);
+      if (distance < 2.0 * samples.spacing) distance = std::abs(d.dot(nq));
+      if (!unlimited && (distance > max_distance || n.dot(nq) < min_cos)) continue;
+      pairing.distances.push_back(distance);
+      pairing.segment_distances[s].push_back(distance);
+      cost.model_coords.push_back(body.mesh_coords()[v]);
+      cost.targets.push_back(q);
+      cost.target_normals.push_back(nq);
+      Vector3d t1 = nq.unitOrthogonal();
+      cost.tangent1.push_back(t1);
+      cost.tangent2.push_back(nq.cross(t1));
+      cost.model_weights.push_back(huber(distance));
+    }
+  }
+  // Scan -> template.
+  for (int i : residual_samples) {
+    const Vector3d& p = samples.points[i];
+    int best = -1;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (int s = 0; s < kNumBodySegments; ++s) {
+      const SegmentWorld& w = segments[s];
+      Vector3d normal;
+      const double d = CapsuleDistance<double>(w.frame, w.a, w.axis, w.e1, w.e2, p, &normal);
+      if (!unlimited && normal.dot(samples.normals[i]) < min_cos) continue;
+      if (std::abs(d) < std::abs(best_d)) {
+        best_d = d;
+        best = s;
+      }
+    }
+    if (best < 0 || (!unlimited && std::abs(best_d) > max_distance)) continue;
+    pairing.distances.push_back(std::abs(best_d));
+    pairing.costs[best].scan_points.push_back(p);
+    pairing.costs[best].scan_weights.push_back(huber(best_d));
+    pairing.scan_points[best].push_back(p);
+  }
+  pairing.num_pairs = static_cast<int>(pairing.distances.size());
+  pairing.rms = Rms(pairing.distances, 1.0);
+  pairing.trimmed_rms = Rms(pairing.distances, 0.9);
+  return pairing;
+}
+
+// Score of a pairing for comparing hypotheses: trimmed rms with unpaired points counted at the
+// pairing distance.
+double HypothesisScore(const Pairing& pairing, int num_candidates, double max_distance) {
+  std::vector<double> d = pairing.distances;
+  while (static_cast<int>(d.size()) < num_candidates) d.push_back(max_distance);
+  return Rms(d, 0.9);
+}
+
+// One Ceres solve on the given pairs.
+void Solve(const BodyTemplate& body, Pairing* pairing, const ScanRegistrationOptions& options, bool rigid, bool fit_shape,
+           double scale, const FitParams& prior, FitParams* fp) {
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  const auto chains = SegmentChains(body);
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    SurfaceCost& source = pairing->costs[s];
+    if (source.num_residuals() == 0) continue;
+    auto* functor = new SurfaceCost(std::move(source));
+    functor->body = &body;
+    functor->root_reference = fp->root_reference;
+    functor->chain_joints = chains[s];
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<SurfaceCost, 16>(functor);
+    std::vector<double*> blocks = {fp->root_t, fp->root_aa};
+    cost->AddParameterBlock(3);
+    cost->AddParameterBlock(3);
+    for (int j : chains[s]) {
+      cost->AddParameterBlock(body.dofs()[j].num_dof());
+      blocks.push_back(fp->dofs[j].data());
+    }
+    cost->AddParameterBlock(kShapeBlockSize);
+    blocks.push_back(fp->shape);
+    cost->SetNumResiduals(functor->num_residuals());
+    problem.AddResidualBlock(cost, nullptr, blocks);
+  }
+  if (problem.NumResidualBlocks() == 0) return;
+  for (int j = 1; j < kNumTemplateJoints; ++j) {
+    const int n = body.dofs()[j].num_dof();
+    double* block = fp->dofs[j].data();
+    if (n == 0 || !problem.HasParameterBlock(block)) continue;
+    if (rigid) {
+      problem.SetParameterBlockConstant(block);
+      continue;
+    }
+    if (options.prior_weight > 0) {
+      Eigen::MatrixXd A = Eigen::MatrixXd::Identity(n, n) * options.prior_weight * scale;
+      Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(prior.dofs[j].data(), n);
+      problem.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, block);
+    }
+    for (int k = 0; k < n; ++k) {
+      block[k] = std::clamp(block[k], body.dofs()[j].lower[k], body.dofs()[j].upper[k]);
+      problem.SetParameterLowerBound(block, k, body.dofs()[j].lower[k]);
+      problem.SetParameterUpperBound(block, k, body.dofs()[j].upper[k]);
+    }
+  }
+  if (fit_shape && !rigid) {
+    Eigen::MatrixXd A = Eigen::MatrixXd::Identity(kShapeBlockSize, kShapeBlockSize) * options.shape_prior_weight * scale;
+    Eigen::VectorXd b(kShapeBlockSize);
+    for (int i = 0; i < kShapeBlockSize; ++i) b(i) = prior.shape[i];
+    // Prior towards a uniformly scaled body: the mean of the current lengths and girths.
+    double mean_l = 0, mean_g = 0;
+    for (int g = 0; g < ti::kNumShapeGroups; ++g) {
+      mean_l += prior.shape[g] / ti::kNumShapeGroups;
+      mean_g += prior.shape[ti::kNumShapeGroups + g] / ti::kNumShapeGroups;
+    }
+    for (int g = 0; g < ti::kNumShapeGroups; ++g) {
+      b(g) = mean_l;
+      b(ti::kNumShapeGroups + g) = mean_g;
+    }
+    problem.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, fp->shape);
+    for (int i = 0; i < kShapeBlockSize; ++i) {
+      problem.SetParameterLowerBound(fp->shape, i, 0.6 * b(i));
+      problem.SetParameterUpperBound(fp->shape, i, 1.6 * b(i));
+    }
+  } else {
+    problem.SetParameterBlockConstant(fp->shape);
+  }
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = options.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.function_tolerance = 1e-6;
+  solver_options.parameter_tolerance = 1e-7;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+  // Fold the root rotation increment into the reference.
+  fp->root_reference = ti::AngleAxisMatrix(fp->root_aa) * fp->root_reference;
+  fp->root_aa[0] = fp->root_aa[1] = fp->root_aa[2] = 0.0;
+}
+
+// The area-weighted centroid of a mesh.
+Vector3d AreaCentroid(const Mesh& mesh) {
+  const Eigen::VectorXd areas = FaceAreas(mesh);
+  Vector3d sum = Vector3d::Zero();
+  double total = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Vector3d c = (mesh.vertices.row(mesh.faces(f, 0)) + mesh.vertices.row(mesh.faces(f, 1)) +
+                        mesh.vertices.row(mesh.faces(f, 2))).transpose() / 3.0;
+    sum += areas(f) * c;
+    total += areas(f);
+  }
+  return total > 0 ? Vector3d(sum / total) : Vector3d::Zero();
+}
+
+// A shoulder rotation vector that turns the rest upper arm of `shoulder` to `angle_deg` from the
+// vertical, in the frontal plane.
+std::array<double, 3> ArmAngle(const BodyTemplate& body, int shoulder, double angle_deg) {
+  const Vector3d rest_dir = (body.generic_rest()[shoulder + 1] - body.generic_rest()[shoulder]).normalized();
+  const double sx = rest_dir.x() < 0 ? -1.0 : 1.0;
+  const double a = angle_deg * M_PI / 180.0;
+  const Vector3d target(sx * std::sin(a), rest_dir.y(), -std::cos(a));
+  const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(rest_dir, target.normalized());
+  const Eigen::AngleAxisd aa(q);
+  const Vector3d v = aa.angle() * aa.axis();
+  return {v.x(), v.y(), v.z()};
+}
+
+std::string Fmt(const char* format, double a, double b = 0, double c = 0) {
+  char buffer[256];
+  std::snprintf(buffer, sizeof buffer, format, a, b, c);
+  return buffer;
+}
+
+double GuessMetresPerUnit(double height) {
+  for (double unit : {1.0, 0.1, 0.01, 0.001, 0.0254})
+    if (height * unit >= 0.9 && height * unit <= 2.5) return unit;
+  return 1.0;
+}
+
+}  // namespace
+
+ScanRegistration RegisterTemplateToScan(const BodyTemplate& body, const Mesh& scan, const ScanRegistrationOptions& options,
+                                        const std::string& scan_source) {
+  options.Check();
+  if (scan.num_faces() == 0 || scan.num_vertices() < 4) throw InputError(scan_source, "the scan has no triangles");
+  if (!scan.vertices.allFinite()) throw InputError(scan_source, "the scan has non-finite vertex coordinates");
+  ScanRegistration result;
+  const double volume = SignedVolume(scan);
+  const bool flip = volume < 0;
+  if (flip) result.warnings.push_back("the scan's faces are oriented inwards (negative volume); normals were flipped");
+  const ScanSamples samples = SampleScan(scan, options.num_scan_samples, flip);
+  if (samples.points.size() < 100) throw InputError(scan_source, "the scan has (almost) no surface area");
+  const KdTree tree(&samples.points);
+  std::vector<int> residual_samples;
+  {
+    const double step = static_cast<double>(samples.points.size()) / options.num_scan_residuals;
+    for (double i = 0; i < samples.points.size(); i += std::max(1.0, step)) residual_samples.push_back(static_cast<int>(i));
+  }
+  // Principal axes of the scan surface.
+  Vector3d centroid = Vector3d::Zero();
+  for (const Vector3d& p : samples.points) centroid += p;
+  centroid /= samples.points.size();
+  Matrix3d covariance = Matrix3d::Zero();
+  for (const Vector3d& p : samples.points) covariance += (p - centroid) * (p - centroid).transpose();
+  Eigen::SelfAdjointEigenSolver<Matrix3d> eigen(covariance / samples.points.size());
+  const Vector3d major = eigen.eigenvectors().col(2), second = eigen.eigenvectors().col(1);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Vector3d& p : samples.points) {
+    lo = std::min(lo, p.dot(major));
+    hi = std::max(hi, p.dot(major));
+  }
+  const double scan_extent = hi - lo;
+
+  // Shape and length scale.
+  const TemplatePose rest_pose;
+  FitParams fp;
+  bool default_shape = true;
+  for (int s = 0; s < kNumBodySegments; ++s)
+    default_shape = default_shape && options.initial_shape.length_scale[s] == 1.0 && options.initial_shape.girth_scale[s] == 1.0;
+  BodyShape shape = options.initial_shape;
+  if (options.fit_shape && default_shape && !options.initial_pose) {
+    const Mesh generic = body.PosedMesh(BodyShape(), rest_pose);
+    const double generic_height = generic.vertices.col(2).maxCoeff() - generic.vertices.col(2).minCoeff();
+    shape = BodyShape::Uniform(1.75 * scan_extent / generic_height);
+  }
+  ShapeToParams(shape, fp.shape);
+  double scale = 0;  // scan units per template metre
+  for (int s = 0; s < kNumBodySegments; ++s) scale += shape.length_scale[s] / kNumBodySegments;
+  const double min_cos = std::cos(options.max_normal_angle_deg * M_PI / 180.0);
+  const double loss = options.loss_scale_m * scale;
+
+  FitParams prior;
+  if (options.initial_pose) {
+    PoseToParams(*options.initial_pose, &fp);
+  } else {
+    // Orientation hypotheses: up = +-major axis, lateral = +-second axis; a short rigid fit each.
+    const auto rest = body.RestPositions(shape);
+    const Vector3d template_centroid = AreaCentroid(body.PosedMesh(shape, rest_pose));
+    double best_score = std::numeric_limits<double>::infinity();
+    FitParams best = fp;
+    for (int up_sign : {1, -1})
+      for (int lateral_sign : {1, -1}) {
+        const Vector3d up = up_sign * major;
+        const Vector3d lateral = (lateral_sign * second - up * up.dot(lateral_sign * second)).normalized();
+        Matrix3d R;
+        R.col(0) = lateral;
+        R.col(1) = up.cross(lateral);
+        R.col(2) = up;
+        FitParams h = fp;
+        h.root_reference = R;
+        const Vector3d t = centroid - rest[0] - R * (template_centroid - rest[0]);
+        for (int k = 0; k < 3; ++k) h.root_t[k] = t[k];
+        const double max_d = 2.0 * options.max_pair_distance_m * scale;
+        for (int round = 0; round < 3; ++round) {
+          Pairing pairing = MakePairs(body, h, samples, tree, residual_samples, max_d, min_cos, loss);
+          Solve(body, &pairing, options, /*rigid=*/true, false, scale, h, &h);
+        }
+        const Pairing check = MakePairs(body, h, samples, tree, residual_samples, max_d, min_cos, loss);
+        const int candidates = static_cast<int>(residual_samples.size() + kNumBodySegments * body.mesh_coords().size());
+        const double score = HypothesisScore(check, candidates, max_d);
+        if (score < best_score) {
+          best_score = score;
+          best = h;
+        }
+      }
+    fp = best;
+    // Arm hypotheses: A-pose (the template's rest), T-pose, arms down.
+    best_score = std::numeric_limits<double>::infinity();
+    const FitParams base = fp;
+    for (double arm_deg : {40.0, 90.0, 12.0}) {
+      FitParams h = base;
+      h.dofs[kTjLeftShoulder] = ArmAngle(body, kTjLeftShoulder, arm_deg);
+      h.dofs[kTjRightShoulder] = ArmAngle(body, kTjRightShoulder, arm_deg);
+      const double max_d = options.max_pair_distance_m * scale;
+      for (int round = 0; round < 2; ++round) {
+        Pairing pairing = MakePairs(body, h, samples, tree, residual_samples, max_d, min_cos, loss);
+        Solve(body, &pairing, options, false, false, scale, h, &h);
+      }
+      const Pairing check = MakePairs(body, h, samples, tree, residual_samples, max_d, min_cos, loss);
+      const int candidates = static_cast<int>(residual_samples.size() + kNumBodySegments * body.mesh_coords().size());
+      const double score = HypothesisScore(check, candidates, max_d);
+      if (score < best_score) {
+        best_score = score;
+        fp = h;
+      }
+    }
+  }
+  prior = fp;
+  prior.dofs = TemplatePose().dofs;  // the joint prior pulls towards the template's rest pose
+  if (options.initial_pose) prior.dofs = options.initial_pose->dofs;
+  ShapeToParams(shape, prior.shape);
+
+  // The full fit: every joint (and the shape), shrinking pairing distance.
+  for (int round = 0; round < options.rounds; ++round) {
+    const double max_d = std::max(options.min_pair_distance_m, options.max_pair_distance_m * std::pow(0.6, round)) * scale;
+    Pairing pairing = MakePairs(body, fp, samples, tree, residual_samples, max_d, min_cos, loss);
+    Solve(body, &pairing, options, false, options.fit_shape, scale, prior, &fp);
+  }
+
+  result.shape = ParamsToShape(fp.shape);
+  result.pose = ParamsToPose(fp);
+  result.scan_height = scan_extent;
+  result.metres_per_unit = GuessMetresPerUnit(scan_extent);
+  {
+    // The body's up direction: from the middle of the ankles to the head.
+    const auto joints = body.JointPositions(result.shape, result.pose);
+    result.up_in_scan = (joints[kTjHead] - 0.5 * (joints[kTjLeftAnkle] + joints[kTjRightAnkle])).normalized();
+  }
+  // Final statistics: every template point and scan sample paired with its nearest.
+  const Pairing final_pairs =
+      MakePairs(body, fp, samples, tree, residual_samples, std::numeric_limits<double>::infinity(), min_cos, loss);
+  result.rms_residual_m = final_pairs.rms;
+  result.trimmed_rms_residual_m = final_pairs.trimmed_rms;
+  for (int s = 0; s < kNumBodySegments; ++s) result.segment_rms_m.push_back(Rms(final_pairs.segment_distances[s], 1.0));
+  const Mesh posed = body.PosedMesh(result.shape, result.pose);
+  const Eigen::VectorXd along_up = posed.vertices * result.up_in_scan;
+  const double height = along_up.maxCoeff() - along_up.minCoeff();
+  if (!(result.trimmed_rms_residual_m <= options.max_residual_fraction * height))
+    throw InputError(scan_source, Fmt("the scan does not look like a human body: the template fit residual is %.3g "
+                                      "(trimmed rms, scan units), more than %.3g%% of the body height %.3g",
+                                      result.trimmed_rms_residual_m, 100 * options.max_residual_fraction, height));
+  // Orientation report.
+  const double tilt_deg = std::acos(std::clamp(result.up_in_scan.z(), -1.0, 1.0)) * 180.0 / M_PI;
+  if (tilt_deg > 30.0) {
+    const std::string how = tilt_deg > 135 ? "upside down" : "lying on its side";
+    const std::string text = Fmt("the scan is not upright in a Z-up world (its up axis is (%.2f, %.2f, %.2f)", result.up_in_scan.x(),
+                                 result.up_in_scan.y(), result.up_in_scan.z()) +
+                             Fmt(", %.0f degrees from +z: ", tilt_deg) + how +
+                             "); the template was posed to match it in the scan's frame";
+    if (!options.allow_reorientation) throw InputError(scan_source, text);
+    result.warnings.push_back(text);
+  }
+  if (result.metres_per_unit != 1.0)
+    result.warnings.push_back(Fmt("the scan is %.3g units tall: its unit looks like %.3g m; the template was scaled to it",
+                                  scan_extent, result.metres_per_unit));
+  // Reference-pose check per segment: the segment's axis against the principal axis of the scan
+  // surface paired with it (limbs), and its residual against the body's.
+  const auto segments = SegmentsInWorld(body, fp);
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    const bool limb = s >= int(BodySegment::kLeftUpperArm) && s != int(BodySegment::kLeftHand) &&
+                      s != int(BodySegment::kRightHand) && s != int(BodySegment::kLeftFoot) &&
+                      s != int(BodySegment::kRightFoot);
+    const auto& points = final_pairs.scan_points[s];
+    if (limb && points.size() >= 30) {
+      Vector3d mean = Vector3d::Zero();
+      for (const Vector3d& p : points) mean += p;
+      mean /= points.size();
+      Matrix3d c = Matrix3d::Zero();
+      for (const Vector3d& p : points) c += (p - mean) * (p - mean).transpose();
+      Eigen::SelfAdjointEigenSolver<Matrix3d> e(c);
+      const Eigen::Vector3d values = e.eigenvalues();
+      if (values(2) > 2.0 * values(1)) {  // elongated enough to have an axis
+        const double angle = std::acos(std::min(1.0, std::abs(e.eigenvectors().col(2).dot(segments[s].axis)))) * 180.0 / M_PI;
+        if (angle > options.reference_pose_tolerance_deg)
+          result.warnings.push_back("reference pose: segment " + BodySegmentName(s) +
+                                    Fmt(" is %.0f degrees off the scan's limb axis", angle));
+      }
+    }
+    const double limit = std::max(3.0 * result.trimmed_rms_residual_m, 0.03 * scale);
+    if (result.segment_rms_m[s] > limit)
+      result.warnings.push_back("reference pose: segment " + BodySegmentName(s) +
+                                Fmt(" fits poorly (rms %.3g scan units, body %.3g)", result.segment_rms_m[s],
+                                    result.trimmed_rms_residual_m));
+  }
+  return result;
+}
+
+std::vector<double> SegmentRotationDifferencesDeg(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& a,
+                                                  const TemplatePose& b) {
+  const Skeleton skeleton = body.MakeSkeleton(shape);
+  const auto wa = WorldFromJoint(skeleton, body.ToPose(a));
+  const auto wb = WorldFromJoint(skeleton, body.ToPose(b));
+  std::vector<double> out;
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    const int j = body.segments()[s].joint;
+    const Eigen::AngleAxisd d(Matrix3d(wa[j].linear().transpose() * wb[j].linear()));
+    out.push_back(std::abs(d.angle()) * 180.0 / M_PI);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// JSON encoding (as poses.json).
+
+namespace {
+
+nlohmann::json ShapeJson(const BodyShape& shape) {
+  nlohmann::json length, girth;
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    length[BodySegmentName(s)] = shape.length_scale[s];
+    girth[BodySegmentName(s)] = shape.girth_scale[s];
+  }
+  return {{"length_scale", length}, {"girth_scale", girth}};
+}
+
+nlohmann::json PoseJson(const BodyTemplate& body, const TemplatePose& pose) {
+  nlohmann::json out;
+  out["root_translation"] = {pose.root_translation.x(), pose.root_translation.y(), pose.root_translation.z()};
+  out["root_rotation_vector"] = {pose.root_rotation.x(), pose.root_rotation.y(), pose.root_rotation.z()};
+  nlohmann::json angles = nlohmann::json::object();
+  for (int j = 0; j < kNumTemplateJoints; ++j) {
+    const int n = body.dofs()[j].num_dof();
+    if (n == 0) continue;
+    angles[body.joint_names()[j]] = std::vector<double>(pose.dofs[j].begin(), pose.dofs[j].begin() + n);
+  }
+  out["joint_angles"] = angles;
+  return out;
+}
+
+Vector3d Vec3(const nlohmann::json& value, const std::string& path, const std::string& what) {
+  if (!value.is_array() || value.size() != 3) throw InputError(path, what + ": expected an array of 3 numbers");
+  Vector3d v;
+  for (int k = 0; k < 3; ++k) {
+    if (!value[k].is_number()) throw InputError(path, what + ": expected an array of 3 numbers");
+    v[k] = value[k].get<double>();
+  }
+  return v;
+}
+
+BodyShape ParseShape(const nlohmann::json& value, const std::string& path) {
+  BodyShape shape;
+  if (!value.is_object() || !value.contains("length_scale") || !value.contains("girth_scale"))
+    throw InputError(path, "shape: expected length_scale and girth_scale");
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    const std::string name = BodySegmentName(s);
+    const auto& l = value["length_scale"];
+    const auto& g = value["girth_scale"];
+    if (!l.contains(name) || !g.contains(name) || !l[name].is_number() || !g[name].is_number())
+      throw InputError(path, "shape: missing scale of segment " + name);
+    shape.length_scale[s] = l[name].get<double>();
+    shape.girth_scale[s] = g[name].get<double>();
+    if (!(shape.length_scale[s] > 0) || !(shape.girth_scale[s] > 0))
+      throw InputError(path, "shape: scales of segment " + name + " must be positive");
+  }
+  return shape;
+}
+
+TemplatePose ParsePose(const BodyTemplate& body, const nlohmann::json& value, const std::string& path) {
+  TemplatePose pose;
+  if (!value.is_object()) throw InputError(path, "pose: expected an object");
+  pose.root_translation = Vec3(value.value("root_translation", nlohmann::json()), path, "root_translation");
+  pose.root_rotation = Vec3(value.value("root_rotation_vector", nlohmann::json()), path, "root_rotation_vector");
+  const auto angles = value.value("joint_angles", nlohmann::json::object());
+  for (int j = 0; j < kNumTemplateJoints; ++j) {
+    const int n = body.dofs()[j].num_dof();
+    const std::string& name = body.joint_names()[j];
+    if (n == 0 || !angles.contains(name)) continue;
+    const auto& a = angles[name];
+    if (!a.is_array() || static_cast<int>(a.size()) != n) throw InputError(path, "joint_angles: " + name + " needs " + std::to_string(n) + " values");
+    for (int k = 0; k < n; ++k) {
+      if (!a[k].is_number()) throw InputError(path, "joint_angles: " + name + " must hold numbers");
+      pose.dofs[j][k] = a[k].get<double>();
+    }
+  }
+  return pose;
+}
+
+nlohmann::json ReadJson(const std::string& path) {
+  const std::string text = ReadTextFile(path);
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path, std::string("not valid JSON: ") + e.what());
+  }
+}
+
+}  // namespace
+
+void WriteTemplateRegistration(const std::string& correspondences_path, const BodyTemplate& body,
+                               const ScanRegistration& registration) {
+  nlohmann::json root = ReadJson(correspondences_path);
+  nlohmann::json reg;
+  reg["format"] = "confluent.template_registration/1";
+  reg["shape"] = ShapeJson(registration.shape);
+  reg["pose"] = PoseJson(body, registration.pose);
+  reg["rms_residual"] = registration.rms_residual_m;
+  reg["trimmed_rms_residual"] = registration.trimmed_rms_residual_m;
+  reg["scan_height"] = registration.scan_height;
+  reg["metres_per_unit"] = registration.metres_per_unit;
+  reg["up_in_scan"] = {registration.up_in_scan.x(), registration.up_in_scan.y(), registration.up_in_scan.z()};
+  reg["warnings"] = registration.warnings;
+  root["template_registration"] = reg;
+  WriteTextFile(correspondences_path, root.dump(1) + "\n");
+}
+
+ScanRegistration ReadTemplateRegistration(const std::string& correspondences_path, const BodyTemplate& body) {
+  const nlohmann::json root = ReadJson(correspondences_path);
+  if (!root.is_object() || !root.contains("template_registration"))
+    throw InputError(correspondences_path, "no \"template_registration\" (write it with confluent correspond)");
+  const auto& reg = root["template_registration"];
+  ScanRegistration result;
+  result.shape = ParseShape(reg.value("shape", nlohmann::json()), correspondences_path);
+  result.pose = ParsePose(body, reg.value("pose", nlohmann::json()), correspondences_path);
+  result.rms_residual_m = reg.value("rms_residual", 0.0);
+  result.trimmed_rms_residual_m = reg.value("trimmed_rms_residual", 0.0);
+  result.scan_height = reg.value("scan_height", 0.0);
+  result.metres_per_unit = reg.value("metres_per_unit", 1.0);
+  if (reg.contains("up_in_scan")) result.up_in_scan = Vec3(reg["up_in_scan"], correspondences_path, "up_in_scan");
+  if (reg.contains("warnings") && reg["warnings"].is_array())
+    for (const auto& w : reg["warnings"])
+      if (w.is_string()) result.warnings.push_back(w.get<std::string>());
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pose from joints.
+
+namespace {
+
+// Residuals of one joint: its world position against the target (3) and, optionally, its world
+// rotation against the target rotation (9, scaled by rotation_weight). Parameter blocks: root
+// translation, root rotation vector, then the DOF blocks of the chain.
+struct JointCost {
+  const BodyTemplate* body = nullptr;
+  int joint = 0;
+  std::array<Vector3d, kNumTemplateJoints> rest;
+  std::vector<int> chain_joints;
+  Vector3d target = Vector3d::Zero();
+  bool has_rotation = false;
+  Matrix3d target_rotation = Matrix3d::Identity();
+  double rotation_weight = 0.1;
+
+  template <typename T>
+  bool operator()(T const* const* p, T* residuals) const {
+    const T* jp[kNumTemplateJoints] = {};
+    for (std::size_t i = 0; i < chain_joints.size(); ++i) jp[chain_joints[i]] = p[2 + i];
+    std::array<ti::Vec3<T>, kNumTemplateJoints> rest_t;
+    for (int j = 0; j < kNumTemplateJoints; ++j) rest_t[j] = rest[j].cast<T>();
+    ti::Mat3<T> R;
+    ti::Vec3<T> P;
+    ti::JointWorldTransform(*body, joint, rest_t, p[0], p[1], Matrix3d::Identity(), jp, &R, &P);
+    for (int k = 0; k < 3; ++k) residuals[k] = P[k] - T(target[k]);
+    if (has_rotation)
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) residuals[3 + 3 * r + c] = T(rotation_weight) * (R(r, c) - T(target_rotation(r, c)));
+    return true;
+  }
+};
+
+}  // namespace
+
+TemplatePose FitPoseToJoints(const BodyTemplate& body, const BodyShape& shape, const std::vector<Vector3d>& joints_in_world,
+                             const std::vector<Eigen::Quaterniond>* world_rotations, const TemplatePose& initial,
+                             const PoseFromJointsOptions& options) {
+  options.Check();
+  if (static_cast<int>(joints_in_world.size()) != kNumTemplateJoints)
+    throw UsageError("FitPoseToJoints: expected " + std::to_string(kNumTemplateJoints) + " joint positions");
+  const bool rotations = world_rotations && !world_rotations->empty();
+  if (rotations && static_cast<int>(world_rotations->size()) != kNumTemplateJoints)
+    throw UsageError("FitPoseToJoints: expected " + std::to_string(kNumTemplateJoints) + " joint rotations");
+  TemplatePose pose = initial;
+  body.ClampToLimits(&pose);
+  double root_t[3] = {pose.root_translation.x(), pose.root_translation.y(), pose.root_translation.z()};
+  double root_aa[3] = {pose.root_rotation.x(), pose.root_rotation.y(), pose.root_rotation.z()};
+  const auto rest = body.RestPositions(shape);
+  ceres::Problem problem;
+  for (int j = 0; j < kNumTemplateJoints; ++j) {
+    auto* functor = new JointCost;
+    functor->body = &body;
+    functor->joint = j;
+    functor->rest = rest;
+    for (int k = j; k > 0; k = body.parents()[k])
+      if (body.dofs()[k].type != JointType::kFixed) functor->chain_joints.push_back(k);
+    std::reverse(functor->chain_joints.begin(), functor->chain_joints.end());
+    functor->target = joints_in_world[j];
+    // A joint's rotation moves its children; end sites (no children) carry no rotation of their own.
+    bool has_children = false;
+    for (int c = 0; c < kNumTemplateJoints; ++c) has_children = has_children || body.parents()[c] == j;
+    functor->has_rotation = rotations && has_children;
+    if (functor->has_rotation) functor->target_rotation = (*world_rotations)[j].normalized().toRotationMatrix();
+    functor->rotation_weight = options.rotation_weight_m;
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<JointCost, 16>(functor);
+    std::vector<double*> blocks = {root_t, root_aa};
+    cost->AddParameterBlock(3);
+    cost->AddParameterBlock(3);
+    for (int k : functor->chain_joints) {
+      cost->AddParameterBlock(body.dofs()[k].num_dof());
+      blocks.push_back(pose.dofs[k].data());
+    }
+    cost->SetNumResiduals(functor->has_rotation ? 12 : 3);
+    problem.AddResidualBlock(cost, nullptr, blocks);
+  }
+  for (int j = 1; j < kNumTemplateJoints; ++j) {
+    const int n = body.dofs()[j].num_dof();
+    double* block = pose.dofs[j].data();
+    if (n == 0 || !problem.HasParameterBlock(block)) continue;
+    for (int k = 0; k < n; ++k) {
+      problem.SetParameterLowerBound(block, k, body.dofs()[j].lower[k]);
+      problem.SetParameterUpperBound(block, k, body.dofs()[j].upper[k]);
+    }
+  }
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.function_tolerance = 1e-10;
+  solver_options.parameter_tolerance = 1e-10;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+  pose.root_translation = Vector3d(root_t[0], root_t[1], root_t[2]);
+  pose.root_rotation = Vector3d(root_aa[0], root_aa[1], root_aa[2]);
+  return pose;
+}
+
+}  // namespace confluent
