@@ -144,7 +144,12 @@ int RunRun(const ParsedArgs& args, const Context& context) {
 
   fs::create_directories(inputs.folder.root);
   RecordRun(inputs, args, InputChecksums(capture, inputs), excluded_names);
-  TimingLog timings(inputs.folder.Path("timings.csv"));
+  // A shard keeps its own log, so that shards running at the same time do not overwrite each other's rows.
+  const std::string timings_path =
+      inputs.folder.Path(args.has("frames") ? "timings_frames_" + std::to_string(inputs.frames.first) + "-" +
+                                                  std::to_string(inputs.frames.end) + ".csv"
+                                            : "timings.csv");
+  TimingLog timings(timings_path);
   std::printf("run %s: %d cameras (%zu held out), frames %d:%d, %s\n", inputs.folder.root.c_str(), rig.size(),
               excluded_names.size(), inputs.frames.first, inputs.frames.end,
               inputs.scan_path.empty() ? "no scan (template 3D video)" : ("scan " + inputs.scan_path).c_str());
@@ -159,7 +164,7 @@ int RunRun(const ParsedArgs& args, const Context& context) {
     PrintReport(RunDeformStage(inputs, context.make_progress(), &timings));
   }
   if (!args.has("no-render")) PrintReport(RunRenderStage(inputs, render, context.make_progress(), &timings));
-  std::printf("done: %s (timings in %s)\n", inputs.folder.root.c_str(), inputs.folder.Path("timings.csv").c_str());
+  std::printf("done: %s (timings in %s)\n", inputs.folder.root.c_str(), timings_path.c_str());
   return 0;
 }
 

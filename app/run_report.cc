@@ -20,12 +20,12 @@ double FromJson(const nlohmann::json& v) { return v.is_number() ? v.get<double>(
 nlohmann::json ScoresJson(const GeometryScores& s) {
   return {{"iou_mean", Number(s.iou_mean)},     {"iou_min", Number(s.iou_min)},
           {"xor_percent_mean", Number(s.xor_percent_mean)}, {"psnr_db_mean", Number(s.psnr_db_mean)},
-          {"ssim_mean", Number(s.ssim_mean)}};
+          {"ssim_mean", Number(s.ssim_mean)}, {"psnr_box_db_mean", Number(s.psnr_box_db_mean)}};
 }
 
 GeometryScores ScoresFromJson(const nlohmann::json& j) {
   return {FromJson(j.at("iou_mean")), FromJson(j.at("iou_min")), FromJson(j.at("xor_percent_mean")),
-          FromJson(j.at("psnr_db_mean")), FromJson(j.at("ssim_mean"))};
+          FromJson(j.at("psnr_db_mean")), FromJson(j.at("ssim_mean")), FromJson(j.value("psnr_box_db_mean", nlohmann::json()))};
 }
 
 std::string Fixed(double v, int decimals) {
@@ -48,7 +48,8 @@ nlohmann::json EvaluationSummary::ToJson() const {
   json["format"] = "confluent.metrics/1";
   json["heldout_cameras"] = heldout;
   json["frames"] = frames;
-  json["masking"] = "PSNR and SSIM over the union of the true and the rendered silhouette; IoU and XOR over the whole image";
+  json["masking"] = "PSNR and SSIM over the union of the true and the rendered silhouette; IoU and XOR over the whole image; "
+                    "psnr_box: PSNR in the bounding box of the union, pixels outside the union black in both images";
   if (has_scan) json["scan"] = ScoresJson(scan);
   json["template"] = ScoresJson(templ);
   json["scan_vertex_error_mean_m"] = Number(vertex_error_mean_m);
@@ -79,12 +80,13 @@ std::string SummaryTable(const EvaluationSummary& summary) {
   for (const std::string& name : summary.heldout) cameras += (cameras.empty() ? "" : ", ") + name;
   out << "held-out evaluation (" << cameras << "; " << summary.frames << " frames)\n";
   char line[160];
-  std::snprintf(line, sizeof line, "  %-10s %9s %9s %8s %10s %7s\n", "geometry", "IoU mean", "IoU min", "XOR %", "PSNR dB", "SSIM");
+  std::snprintf(line, sizeof line, "  %-10s %9s %9s %8s %10s %7s %12s\n", "geometry", "IoU mean", "IoU min", "XOR %", "PSNR dB",
+                "SSIM", "PSNR box dB");
   out << line;
   auto row = [&](const char* name, const GeometryScores& s) {
-    std::snprintf(line, sizeof line, "  %-10s %9s %9s %8s %10s %7s\n", name, Fixed(s.iou_mean, 4).c_str(),
+    std::snprintf(line, sizeof line, "  %-10s %9s %9s %8s %10s %7s %12s\n", name, Fixed(s.iou_mean, 4).c_str(),
                   Fixed(s.iou_min, 4).c_str(), Fixed(s.xor_percent_mean, 1).c_str(), Fixed(s.psnr_db_mean, 2).c_str(),
-                  Fixed(s.ssim_mean, 4).c_str());
+                  Fixed(s.ssim_mean, 4).c_str(), Fixed(s.psnr_box_db_mean, 2).c_str());
     out << line;
   };
   if (summary.has_scan) row("scan", summary.scan);
@@ -105,7 +107,9 @@ std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, c
        << "</code></p>\n";
   html << "<h2>Summary</h2>\n<pre>" << Escape(SummaryTable(summary)) << "</pre>\n";
   html << "<p>PSNR and SSIM are computed inside the union of the true and the rendered silhouette; IoU and the XOR "
-          "error (% of the true silhouette area) over the whole image.</p>\n";
+          "error (% of the true silhouette area) over the whole image. \"PSNR box\" is the PSNR in the bounding box of "
+          "that union with the pixels outside the union black in both images (the Neural Body / ZJU-MoCap "
+          "convention).</p>\n";
   for (const std::string& warning : summary.warnings) html << "<p><b>Warning:</b> " << Escape(warning) << "</p>\n";
   if (fs::exists(run.VideoPath("orbit")))
     html << "<h2>3D video</h2>\n<video controls width=\"960\" src=\"renders/orbit.mp4\"></video>\n";

@@ -18,6 +18,7 @@ struct GeometryScores {
   double xor_percent_mean = 0.0;
   double psnr_db_mean = 0.0;
   double ssim_mean = 0.0;
+  double psnr_box_db_mean = 0.0;  // bounding-box convention (see `confluent evaluate --help`)
 };
 
 // What `confluent evaluate` found.

@@ -50,7 +50,10 @@ StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& 
                             inputs.correspondences_path);
     report.notes.push_back(std::to_string(correspondences.pairs.size()) + " correspondences given: " + inputs.correspondences_path);
   } else {
-    correspondences = PlaceCorrespondences(reference, scan);
+    CorrespondencePlacementOptions placement;
+    placement.joint_positions = body.JointPositions(shape, registration.pose);
+    placement.metres_per_unit = registration.metres_per_unit;
+    correspondences = PlaceCorrespondences(reference, scan, placement);
     report.notes.push_back(std::to_string(correspondences.pairs.size()) + " correspondences placed automatically");
   }
   correspondences.scan_path = fs::absolute(inputs.scan_path).string();
@@ -197,10 +200,11 @@ StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& op
   std::vector<std::string> frames;
   for (int frame = 0; frame < capture.num_frames(); ++frame)
     if (fs::exists(folder.RenderPath(options.view, frame))) frames.push_back(folder.RenderPath(options.view, frame));
-  if (static_cast<int>(frames.size()) < capture.num_frames())
-    report.notes.push_back(std::to_string(capture.num_frames() - frames.size()) + " frame(s) of the capture not rendered yet");
   const std::string video = folder.VideoPath(options.view);
-  if (!frames.empty() && (report.computed > 0 || !fs::exists(video))) {
+  if (static_cast<int>(frames.size()) < capture.num_frames()) {
+    report.notes.push_back(std::to_string(capture.num_frames() - frames.size()) +
+                           " frame(s) of the capture not rendered yet: " + video + " is written once all are");
+  } else if (report.computed > 0 || !fs::exists(video)) {
     VideoWriterOptions video_options;
     video_options.fps = options.fps;
     if (!FfmpegAvailable(video_options)) {

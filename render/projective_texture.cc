@@ -106,22 +106,27 @@ void main() {
     vec2 pixel = vec2(K.x * xn.x + cam_skew[i] * xn.y + K.z, K.y * xn.y + K.w);
     vec2 size = cam_size[i];
     if (pixel.x < -0.5 || pixel.y < -0.5 || pixel.x > size.x - 0.5 || pixel.y > size.y - 0.5) continue;
-    // Shadow-map test against the nearest texel of the depth map (with a bias).
+    // Shadow-map test against the farthest of the 4 surrounding depth texels (lenient on slanted
+    // surfaces; occlusion edges are feathered anyway), feather from the nearest texel.
+    vec2 uv = (pixel + 0.5) / atlas_size;
+    vec4 depths = textureGather(depth_feather, vec3(uv, float(i)), 0);
+    float depth = max(max(depths.x, depths.y), max(depths.z, depths.w));
+    if (depth <= 0.0 || p.z > depth + depth_bias) continue;
     ivec2 texel = clamp(ivec2(floor(pixel + 0.5)), ivec2(0), ivec2(size) - 1);
-    vec2 df = texelFetch(depth_feather, ivec3(texel, i), 0).rg;
-    if (df.x <= 0.0 || p.z > df.x + depth_bias || df.y <= 0.0) continue;
+    float feather = texelFetch(depth_feather, ivec3(texel, i), 0).g;
+    if (feather <= 0.0) continue;
     vec3 to_camera = cam_center[i] - X;
     float camera_distance = length(to_camera);
     to_camera /= camera_distance;
     float facing = dot(n, to_camera);
     if (facing <= 0.0) continue;
-    float q = df.y;
+    float q = feather;
     if (grazing_cos > 0.0) q *= smoothstep(0.0, grazing_cos, facing);
     if (q <= 0.0) continue;
     // Angle between the rays: sqrt(2 - 2 cos) is the chord, within 5% of the angle below 60 deg.
     float angle = sqrt(max(2.0 - 2.0 * dot(to_view, to_camera), 0.0));
     float penalty = max(angle + resolution_weight * max(0.0, camera_distance - view_distance) / view_distance, 1e-4);
-    vec3 color = texture(images, vec3((pixel + 0.5) / atlas_size, float(i))).rgb * cam_gain[i];
+    vec3 color = texture(images, vec3(uv, float(i))).rgb * cam_gain[i];
     ++count;
     for (int s = 0; s < SLOTS; ++s) {  // insertion into the sorted slots
       bool take = penalty < slot_penalty[s];

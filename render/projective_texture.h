@@ -4,22 +4,24 @@
 //
 // Per output pixel, every input camera i that sees the surface point X contributes its image
 // colour with a weight (Buehler et al. 2001, "Unstructured Lumigraph Rendering"):
-//   - visibility: X's camera z is at most the nearest depth-map texel + depth_bias_m (shadow map;
-//     the depth maps are rendered once per frame with MeshRenderer, lens distortion included);
+//   - visibility: X's camera z is at most the farthest of the 4 nearest depth-map texels plus
+//     depth_bias_m (a shadow-map test; the depth maps are rendered once per frame with
+//     MeshRenderer, lens distortion included);
 //   - penalty p_i = angle between the novel ray and camera i's ray at X (radians, as the chord
 //     sqrt(2 - 2 cos), within 5% below 60 degrees), plus
 //     optionally resolution_weight * max(0, |X - C_i| - |X - C_novel|) / |X - C_novel|;
-//   - best k: with t = the (k+1)-th smallest penalty (or the largest + epsilon when fewer
-//     cameras see X), w_i = (1 - p_i / t) / p_i for the k best, 0 for the others;
-//   - feathering: w_i *= smoothstep(0, feather_px, distance to the nearest silhouette edge or
-//     depth discontinuity in camera i), so seams fade out before the outline;
+//   - best k: with t = the (k+1)-th smallest penalty (pi when k or fewer cameras see X),
+//     w_i = (1 - p_i / t) / p_i for the k best, 0 for the others;
+//   - feathering: w_i *= smoothstep(0, feather_px, distance to the nearest edge of the mesh's
+//     outline, a depth discontinuity or the mask's outline in camera i), and 0 outside the
+//     camera's mask, so seams fade out before the outline;
 //   - grazing angles: w_i *= smoothstep(0, grazing_cos, n . direction to camera i).
-// Weights are normalised. Where no camera sees X (sum of weights ~ 0) the mesh's own vertex
-// colours are used (or fallback_color). A camera that sees nothing contributes nothing; the
-// output never contains NaN.
+// Weights are normalised. Where no camera sees X the mesh's own vertex colours are used (or
+// fallback_color). A camera that sees nothing contributes nothing; the output never contains
+// NaN.
 //
 // Optional colour balancing: per camera RGB gains fitted by least squares on surface points that
-// several cameras see (log-gain differences, mean log-gain fixed to 0).
+// several cameras see well (log-colour differences; a weak prior keeps the mean gain near 1).
 
 #include <Eigen/Core>
 #include <memory>

@@ -107,8 +107,7 @@ Image CleanMask(const Image& raw, const MaskCleanupOptions& options, MaskCleanup
 
   // Fill the small enclosed holes (4-connected background not reaching the border).
   if (options.max_hole_fraction > 0) {
-    cv::Mat background;
-    cv::bitwise_not(kept, background);  // kept is 0/255
+    cv::Mat background = 255 - kept;
     cv::Mat hole_labels, hole_stats, hole_centroids;
     const int holes = cv::connectedComponentsWithStats(background, hole_labels, hole_stats, hole_centroids, 4, CV_32S);
     std::vector<std::uint8_t> fill(holes, 0);
@@ -136,24 +135,19 @@ Image CleanMask(const Image& raw, const MaskCleanupOptions& options, MaskCleanup
   const cv::Mat cross = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
   cv::erode(kept, core, cross, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
   cv::dilate(kept, band, cross);
-  // Upsampling: full-resolution pixel (x, y) reads work pixel (x / scale, y / scale). Each work
-  // row is widened once and serves `scale` full-resolution rows with a plain (vectorised) loop.
-  std::vector<std::uint8_t> wide_core(raw.width), wide_band(raw.width);
+  // Upsampling by lookup: full-resolution pixel (x, y) reads work pixel (x / scale, y / scale).
+  std::vector<int> column(raw.width);
+  for (int x = 0; x < raw.width; ++x) column[x] = x / scale;
   for (int y = 0; y < raw.height; ++y) {
     const std::uint8_t* core_row = core.ptr<std::uint8_t>(y / scale);
     const std::uint8_t* band_row = band.ptr<std::uint8_t>(y / scale);
-    if (scale > 1) {
-      if (y % scale == 0)
-        for (int x = 0; x < raw.width; ++x) {
-          wide_core[x] = core_row[x / scale];
-          wide_band[x] = band_row[x / scale];
-        }
-      core_row = wide_core.data();
-      band_row = wide_band.data();
-    }
     const std::uint8_t* raw_row = raw.data.data() + static_cast<std::size_t>(y) * raw.width;
     std::uint8_t* out = result.data.data() + static_cast<std::size_t>(y) * raw.width;
-    for (int x = 0; x < raw.width; ++x) out[x] = core_row[x] | (raw_row[x] & band_row[x]);
+    if (scale == 1) {
+      for (int x = 0; x < raw.width; ++x) out[x] = core_row[x] | (raw_row[x] & band_row[x]);
+    } else {
+      for (int x = 0; x < raw.width; ++x) out[x] = core_row[column[x]] | (raw_row[x] & band_row[column[x]]);
+    }
   }
   return result;
 }

@@ -17,6 +17,7 @@
 #include "core/error.h"
 #include "core/mesh_ops.h"
 #include "tracking/body_model_impl.h"
+#include "tracking/fit_params.h"
 #include "tracking/pose_from_joints.h"
 
 namespace confluent {
@@ -44,7 +45,15 @@ void PoseFromJointsOptions::Check() const {
 
 namespace {
 
-constexpr int kShapeBlockSize = 2 * ti::kNumShapeGroups;
+using ti::FitParams;
+using ti::kShapeBlockSize;
+using ti::ParamsToPose;
+using ti::ParamsToShape;
+using ti::PoseToParams;
+using ti::SegmentsInWorld;
+using ti::SegmentWorld;
+using ti::ShapeArrays;
+using ti::ShapeToParams;
 
 // ---------------------------------------------------------------------------------------------
 // Nearest-neighbour queries on scan samples: a static k-d tree.
@@ -158,86 +167,6 @@ ScanSamples SampleScan(const Mesh& scan, int count, bool flip_normals) {
 
 // ---------------------------------------------------------------------------------------------
 // Parameters and the template's segments in the world.
-
-struct FitParams {
-  double root_t[3] = {0, 0, 0};
-  double root_aa[3] = {0, 0, 0};
-  Matrix3d root_reference = Matrix3d::Identity();
-  std::array<std::array<double, 3>, kNumTemplateJoints> dofs{};
-  double shape[kShapeBlockSize];
-};
-
-void ShapeArrays(const double* shape, double* length, double* girth) {
-  for (int s = 0; s < kNumBodySegments; ++s) {
-    length[s] = shape[ti::kSegmentGroup[s]];
-    girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
-  }
-}
-
-void ShapeToParams(const BodyShape& shape, double* params) {
-  for (int g = 0; g < ti::kNumShapeGroups; ++g) {
-    double l = 0, gi = 0;
-    int n = 0;
-    for (int s = 0; s < kNumBodySegments; ++s)
-      if (ti::kSegmentGroup[s] == g) {
-        l += shape.length_scale[s];
-        gi += shape.girth_scale[s];
-        ++n;
-      }
-    params[g] = l / n;
-    params[ti::kNumShapeGroups + g] = gi / n;
-  }
-}
-
-BodyShape ParamsToShape(const double* params) {
-  BodyShape shape;
-  ShapeArrays(params, shape.length_scale.data(), shape.girth_scale.data());
-  return shape;
-}
-
-TemplatePose ParamsToPose(const FitParams& fp) {
-  TemplatePose pose;
-  const Eigen::AngleAxisd aa(Matrix3d(ti::AngleAxisMatrix(fp.root_aa) * fp.root_reference));
-  pose.root_rotation = aa.angle() * aa.axis();
-  pose.root_translation = Vector3d(fp.root_t[0], fp.root_t[1], fp.root_t[2]);
-  pose.dofs = fp.dofs;
-  return pose;
-}
-
-void PoseToParams(const TemplatePose& pose, FitParams* fp) {
-  for (int k = 0; k < 3; ++k) fp->root_t[k] = pose.root_translation[k];
-  fp->root_aa[0] = fp->root_aa[1] = fp->root_aa[2] = 0.0;
-  fp->root_reference = ti::AngleAxisMatrix(pose.root_rotation.data());
-  fp->dofs = pose.dofs;
-}
-
-struct SegmentWorld {
-  ti::SegmentFrame<double> frame;
-  Vector3d a, axis, e1, e2;
-  Matrix3d R;
-  Vector3d P;
-};
-
-std::array<SegmentWorld, kNumBodySegments> SegmentsInWorld(const BodyTemplate& body, const FitParams& fp) {
-  double length[kNumBodySegments], girth[kNumBodySegments];
-  ShapeArrays(fp.shape, length, girth);
-  std::array<Vector3d, kNumTemplateJoints> rest;
-  ti::RestPositions(body, length, girth, &rest);
-  const double* jp[kNumTemplateJoints];
-  for (int j = 0; j < kNumTemplateJoints; ++j) jp[j] = fp.dofs[j].data();
-  std::array<SegmentWorld, kNumBodySegments> out;
-  for (int s = 0; s < kNumBodySegments; ++s) {
-    SegmentWorld& w = out[s];
-    const int joint = body.segments()[s].joint;
-    ti::JointWorldTransform(body, joint, rest, fp.root_t, fp.root_aa, fp.root_reference, jp, &w.R, &w.P);
-    w.frame = ti::MakeSegmentFrame(body, s, rest, length, girth);
-    w.a = w.P + w.R * (w.frame.a - rest[joint]);
-    w.axis = w.R * w.frame.axis;
-    w.e1 = w.R * w.frame.e1;
-    w.e2 = w.R * w.frame.e2;
-  }
-  return out;
-}
 
 // Approximate signed distance of a point to a segment capsule (negative inside) from its
 // normalised capsule coordinates; `normal` receives the outward direction.

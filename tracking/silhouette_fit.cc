@@ -14,6 +14,7 @@
 #include "core/cv_interop.h"
 #include "core/error.h"
 #include "tracking/body_model_impl.h"
+#include "tracking/fit_params.h"
 
 namespace confluent {
 
@@ -104,7 +105,11 @@ int SilhouetteObservations::num_used_cameras() const { return static_cast<int>(i
 
 namespace {
 
-constexpr int kShapeBlockSize = 2 * ti::kNumShapeGroups;
+using ti::FitParams;
+using ti::kShapeBlockSize;
+using ti::SegmentsInWorld;
+using ti::SegmentWorld;
+using ti::ShapeArrays;
 
 // Residuals of one segment in one camera: model -> image samples and/or image -> model rays.
 // Parameter blocks: root translation (3), root rotation vector (3), the DOF blocks of the
@@ -247,51 +252,6 @@ double RayCapsuleDistance(const ti::SegmentFrame<double>& frame, const Vector3d&
   const Vector3d av(ox / rx, oy / ry, qz0 * inv_cap), bv(dx / rx, dy / ry, dz * inv_cap);
   const double tau = -av.dot(bv) / (bv.dot(bv) + 1e-12);
   return (av + tau * bv).norm();
-}
-
-// The parameter vectors of a fit.
-struct FitParams {
-  double root_t[3];
-  double root_aa[3] = {0, 0, 0};
-  Matrix3d root_reference;
-  std::array<std::array<double, 3>, kNumTemplateJoints> dofs;
-  double shape[kShapeBlockSize];
-};
-
-void ShapeArrays(const double* shape, double* length, double* girth) {
-  for (int s = 0; s < kNumBodySegments; ++s) {
-    length[s] = shape[ti::kSegmentGroup[s]];
-    girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
-  }
-}
-
-// World frames of all segments for the current parameters.
-struct SegmentWorld {
-  ti::SegmentFrame<double> frame;
-  Vector3d a, axis, e1, e2;
-  Matrix3d R;
-  Vector3d P;
-};
-
-std::array<SegmentWorld, kNumBodySegments> SegmentsInWorld(const BodyTemplate& body, const FitParams& fp) {
-  double length[kNumBodySegments], girth[kNumBodySegments];
-  ShapeArrays(fp.shape, length, girth);
-  std::array<Vector3d, kNumTemplateJoints> rest;
-  ti::RestPositions(body, length, girth, &rest);
-  const double* jp[kNumTemplateJoints];
-  for (int j = 0; j < kNumTemplateJoints; ++j) jp[j] = fp.dofs[j].data();
-  std::array<SegmentWorld, kNumBodySegments> out;
-  for (int s = 0; s < kNumBodySegments; ++s) {
-    SegmentWorld& w = out[s];
-    const int joint = body.segments()[s].joint;
-    ti::JointWorldTransform(body, joint, rest, fp.root_t, fp.root_aa, fp.root_reference, jp, &w.R, &w.P);
-    w.frame = ti::MakeSegmentFrame(body, s, rest, length, girth);
-    w.a = w.P + w.R * (w.frame.a - rest[joint]);
-    w.axis = w.R * w.frame.axis;
-    w.e1 = w.R * w.frame.e1;
-    w.e2 = w.R * w.frame.e2;
-  }
-  return out;
 }
 
 bool IsCoarseSegment(int s) {

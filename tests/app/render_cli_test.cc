@@ -97,9 +97,9 @@ TEST(RenderCommand, FixedCameraReproducesItsImageAndBulletTimeFreezesAFrame) {
     EXPECT_NEAR(rendered.at<std::uint8_t>(cx, cy, c), real.at<std::uint8_t>(cx, cy, c), 20) << "channel " << c;
 
   result = testing::RunConfluent({"render", f.capture, "--run", f.run, "--out", f.dir / "bullet", "--path", "bullet:3",
-                                  "--path-frames", "6", "--width", "48", "--height", "36"});
+                                  "--path-frames", "12", "--width", "48", "--height", "36"});
   ASSERT_EQ(result.exit_code, 0) << result.stderr_text;
-  EXPECT_EQ(CountFiles(f.dir / "bullet/bullet_000003", ".png"), 6);
+  EXPECT_EQ(CountFiles(f.dir / "bullet/bullet_000003", ".png"), 12);
 
   result = testing::RunConfluent({"render", f.capture, "--run", f.run, "--out", f.dir / "path", "--path",
                                   "cameras:cam00,cam01", "--frames", "0:2", "--format", "exr"});

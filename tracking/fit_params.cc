@@ -1,0 +1,75 @@
+#include "tracking/fit_params.h"
+
+#include <Eigen/Geometry>
+
+namespace confluent::tracking_internal {
+
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+void ShapeArrays(const double* shape, double* length, double* girth) {
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    length[s] = shape[kSegmentGroup[s]];
+    girth[s] = shape[kNumShapeGroups + kSegmentGroup[s]];
+  }
+}
+
+void ShapeToParams(const BodyShape& shape, double* params) {
+  for (int g = 0; g < kNumShapeGroups; ++g) {
+    double l = 0, gi = 0;
+    int n = 0;
+    for (int s = 0; s < kNumBodySegments; ++s)
+      if (kSegmentGroup[s] == g) {
+        l += shape.length_scale[s];
+        gi += shape.girth_scale[s];
+        ++n;
+      }
+    params[g] = l / n;
+    params[kNumShapeGroups + g] = gi / n;
+  }
+}
+
+BodyShape ParamsToShape(const double* params) {
+  BodyShape shape;
+  ShapeArrays(params, shape.length_scale.data(), shape.girth_scale.data());
+  return shape;
+}
+
+TemplatePose ParamsToPose(const FitParams& fp) {
+  TemplatePose pose;
+  const Eigen::AngleAxisd aa(Matrix3d(AngleAxisMatrix(fp.root_aa) * fp.root_reference));
+  pose.root_rotation = aa.angle() * aa.axis();
+  pose.root_translation = Vector3d(fp.root_t[0], fp.root_t[1], fp.root_t[2]);
+  pose.dofs = fp.dofs;
+  return pose;
+}
+
+void PoseToParams(const TemplatePose& pose, FitParams* fp) {
+  for (int k = 0; k < 3; ++k) fp->root_t[k] = pose.root_translation[k];
+  fp->root_aa[0] = fp->root_aa[1] = fp->root_aa[2] = 0.0;
+  fp->root_reference = AngleAxisMatrix(pose.root_rotation.data());
+  fp->dofs = pose.dofs;
+}
+
+std::array<SegmentWorld, kNumBodySegments> SegmentsInWorld(const BodyTemplate& body, const FitParams& fp) {
+  double length[kNumBodySegments], girth[kNumBodySegments];
+  ShapeArrays(fp.shape, length, girth);
+  std::array<Vector3d, kNumTemplateJoints> rest;
+  RestPositions(body, length, girth, &rest);
+  const double* jp[kNumTemplateJoints];
+  for (int j = 0; j < kNumTemplateJoints; ++j) jp[j] = fp.dofs[j].data();
+  std::array<SegmentWorld, kNumBodySegments> out;
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    SegmentWorld& w = out[s];
+    const int joint = body.segments()[s].joint;
+    JointWorldTransform(body, joint, rest, fp.root_t, fp.root_aa, fp.root_reference, jp, &w.R, &w.P);
+    w.frame = MakeSegmentFrame(body, s, rest, length, girth);
+    w.a = w.P + w.R * (w.frame.a - rest[joint]);
+    w.axis = w.R * w.frame.axis;
+    w.e1 = w.R * w.frame.e1;
+    w.e2 = w.R * w.frame.e2;
+  }
+  return out;
+}
+
+}  // namespace confluent::tracking_internal

@@ -1,0 +1,44 @@
+#pragma once
+// INTERNAL (tracking/*.cc only): the parameter blocks shared by the template fits (silhouettes
+// and scan registration) and the segments' world frames they imply.
+
+#include <Eigen/Core>
+#include <array>
+
+#include "tracking/body_model_impl.h"
+#include "tracking/body_template.h"
+
+namespace confluent::tracking_internal {
+
+// Length and girth scale per shape group.
+constexpr int kShapeBlockSize = 2 * kNumShapeGroups;
+
+// The parameter vectors of a fit: world_from_pelvis = R(root_aa) * root_reference.
+struct FitParams {
+  double root_t[3] = {0, 0, 0};
+  double root_aa[3] = {0, 0, 0};
+  Eigen::Matrix3d root_reference = Eigen::Matrix3d::Identity();
+  std::array<std::array<double, 3>, kNumTemplateJoints> dofs{};
+  double shape[kShapeBlockSize] = {};
+};
+
+// Per-segment length and girth scales from a shape block.
+void ShapeArrays(const double* shape, double* length, double* girth);
+// The shape block of `shape` (group means) and back.
+void ShapeToParams(const BodyShape& shape, double* params);
+BodyShape ParamsToShape(const double* params);
+// The pose the parameters describe, and parameters for a pose (root_aa zero, the rotation in
+// root_reference).
+TemplatePose ParamsToPose(const FitParams& fp);
+void PoseToParams(const TemplatePose& pose, FitParams* fp);
+
+// One segment's capsule frame in the world for the current parameters.
+struct SegmentWorld {
+  SegmentFrame<double> frame;
+  Eigen::Vector3d a, axis, e1, e2;
+  Eigen::Matrix3d R;
+  Eigen::Vector3d P;
+};
+std::array<SegmentWorld, kNumBodySegments> SegmentsInWorld(const BodyTemplate& body, const FitParams& fp);
+
+}  // namespace confluent::tracking_internal
