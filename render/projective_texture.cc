@@ -8,6 +8,7 @@
 // (shadow-map style) and blends the best k cameras.
 
 #include "render/projective_texture.h"
+#include "render/gl_program.h"
 
 #include <epoxy/gl.h>
 
@@ -25,6 +26,10 @@
 
 namespace confluent {
 namespace {
+
+using render_internal::CamFromWorld;
+using render_internal::ClipFromCamera;
+using render_internal::LinkProgram;
 
 constexpr int kMaxCameras = 32;
 
@@ -156,56 +161,6 @@ void main() {
 }
 )";
 
-GLuint CompileShader(GLenum type, const char* source) {
-  const GLuint shader = glCreateShader(type);
-  glShaderSource(shader, 1, &source, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[4096];
-    glGetShaderInfoLog(shader, sizeof(log), nullptr, log);
-    glDeleteShader(shader);
-    throw RenderContextError(std::string("OpenGL: projective texture shader does not compile: ") + log);
-  }
-  return shader;
-}
-
-GLuint LinkProgram(const char* vertex_source, const char* fragment_source) {
-  const GLuint vertex = CompileShader(GL_VERTEX_SHADER, vertex_source);
-  const GLuint fragment = CompileShader(GL_FRAGMENT_SHADER, fragment_source);
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vertex);
-  glAttachShader(program, fragment);
-  glLinkProgram(program);
-  glDeleteShader(vertex);
-  glDeleteShader(fragment);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[4096];
-    glGetProgramInfoLog(program, sizeof(log), nullptr, log);
-    glDeleteProgram(program);
-    throw RenderContextError(std::string("OpenGL: projective texture program does not link: ") + log);
-  }
-  return program;
-}
-
-// OpenCV K (pixel centres at integers, y down) -> GL clip space with the y flip folded in, so
-// that glReadPixels returns rows top first (as MeshRenderer does).
-Eigen::Matrix4d ClipFromCamera(const Eigen::Matrix3d& K, int width, int height, double n, double f) {
-  Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
-  P(0, 0) = 2.0 * K(0, 0) / width;
-  P(0, 1) = 2.0 * K(0, 1) / width;
-  P(0, 2) = 2.0 * (K(0, 2) + 0.5) / width - 1.0;
-  P(1, 1) = 2.0 * K(1, 1) / height;
-  P(1, 2) = 2.0 * (K(1, 2) + 0.5) / height - 1.0;
-  P(2, 2) = (f + n) / (f - n);
-  P(2, 3) = -2.0 * f * n / (f - n);
-  P(3, 2) = 1.0;
-  return P;
-}
-
 float Smoothstep(float edge, float x) {
   if (edge <= 0.0f) return 1.0f;
   const float t = std::clamp(x / edge, 0.0f, 1.0f);
@@ -298,7 +253,7 @@ struct ProjectiveTexturer::Impl {
     context.MakeCurrent();
     const std::string fragment = "#version 430 core\n#define BEST_K " + std::to_string(options.best_k) + "\n" +
                                  kFragmentShader;
-    program = LinkProgram(kVertexShader, fragment.c_str());
+    program = LinkProgram(kVertexShader, fragment, "projective texture");
     glGenVertexArrays(1, &vertex_array);
     glBindVertexArray(vertex_array);
     glGenBuffers(1, &position_buffer);
@@ -674,21 +629,9 @@ struct ProjectiveTexturer::Impl {
     glClearBufferfv(GL_COLOR, 0, transparent);
     const GLfloat far_depth = 1.0f;
     glClearBufferfv(GL_DEPTH, 0, &far_depth);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LEQUAL);
-    if (options.cull_back_faces) {
-      // Counter-clockwise seen from outside becomes clockwise in window coordinates (y flip).
-      glEnable(GL_CULL_FACE);
-      glFrontFace(GL_CW);
-      glCullFace(GL_BACK);
-    } else {
-      glDisable(GL_CULL_FACE);
-    }
-    glDisable(GL_BLEND);
+    render_internal::SetMeshRasterState(options.cull_back_faces, GL_LEQUAL);
 
-    Eigen::Matrix4d cam_from_world = Eigen::Matrix4d::Identity();
-    cam_from_world.topLeftCorner<3, 3>() = view.rotation;
-    cam_from_world.topRightCorner<3, 1>() = view.translation;
+    const Eigen::Matrix4d cam_from_world = CamFromWorld(view);
     const Eigen::Matrix4f clip_from_world =
         (ClipFromCamera(K, width, height, renderer_options.near_m, renderer_options.far_m) * cam_from_world)
             .cast<float>();

@@ -1,6 +1,7 @@
 // MeshRenderer: OpenGL 4.3 core rasterisation of meshes into calibrated cameras.
 
 #include "render/renderer.h"
+#include "render/gl_program.h"
 
 #include <epoxy/gl.h>
 
@@ -15,6 +16,10 @@
 
 namespace confluent {
 namespace {
+
+using render_internal::CamFromWorld;
+using render_internal::ClipFromCamera;
+using render_internal::LinkProgram;
 
 // Colour attachments of a render target, in this order (= fragment output locations).
 enum Attachment { kColor = 0, kCameraZ = 1, kTriangleId = 2, kMask = 3, kNumAttachments = 4 };
@@ -150,42 +155,6 @@ void main() {
   out_mask = 1.0;
 }
 )";
-
-GLuint CompileShader(GLenum type, const std::string& source) {
-  const GLuint shader = glCreateShader(type);
-  const char* text = source.c_str();
-  glShaderSource(shader, 1, &text, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[4096] = {0};
-    glGetShaderInfoLog(shader, sizeof(log) - 1, nullptr, log);
-    glDeleteShader(shader);
-    throw RenderContextError(std::string("OpenGL: shader compilation failed: ") + log);
-  }
-  return shader;
-}
-
-GLuint LinkProgram(const std::string& vertex, const std::string& fragment) {
-  const GLuint vs = CompileShader(GL_VERTEX_SHADER, vertex);
-  const GLuint fs = CompileShader(GL_FRAGMENT_SHADER, fragment);
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[4096] = {0};
-    glGetProgramInfoLog(program, sizeof(log) - 1, nullptr, log);
-    glDeleteProgram(program);
-    throw RenderContextError(std::string("OpenGL: shader program link failed: ") + log);
-  }
-  return program;
-}
 
 void SetMatrix(GLuint program, const char* name, const Eigen::Matrix4d& matrix) {
   const Eigen::Matrix4f m = matrix.cast<float>();  // column-major, as GL expects
@@ -365,9 +334,9 @@ struct MeshRenderer::Impl {
 
   explicit Impl(const MeshRendererOptions& opts) : options(opts), context(opts.context) {
     color_program = LinkProgram(kMeshVertexShader, std::string("#version 430 core\n#define WITH_COLOR\n") +
-                                                       kMeshFragmentShader);
-    geometry_program = LinkProgram(kMeshVertexShader, std::string("#version 430 core\n") + kMeshFragmentShader);
-    remap_program = LinkProgram(kRemapVertexShader, kRemapFragmentShader);
+                                                       kMeshFragmentShader, "mesh");
+    geometry_program = LinkProgram(kMeshVertexShader, std::string("#version 430 core\n") + kMeshFragmentShader, "mesh");
+    remap_program = LinkProgram(kRemapVertexShader, kRemapFragmentShader, "distortion remap");
     glGenVertexArrays(1, &empty_vertex_array);
     GLint max_texture = 0, max_viewport[2] = {0, 0}, max_renderbuffer = 0;
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
@@ -637,22 +606,6 @@ struct MeshRenderer::Impl {
     return maps.back();
   }
 
-  // OpenCV K (pixel centres at integers, y down) -> GL clip space with the y flip folded in,
-  // so that window row r holds image row r and glReadPixels returns rows top first.
-  Eigen::Matrix4d ClipFromCamera(const Eigen::Matrix3d& K, int width, int height) const {
-    const double n = options.near_m, f = options.far_m;
-    Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
-    P(0, 0) = 2.0 * K(0, 0) / width;
-    P(0, 1) = 2.0 * K(0, 1) / width;
-    P(0, 2) = 2.0 * (K(0, 2) + 0.5) / width - 1.0;
-    P(1, 1) = 2.0 * K(1, 1) / height;
-    P(1, 2) = 2.0 * (K(1, 2) + 0.5) / height - 1.0;
-    P(2, 2) = (f + n) / (f - n);
-    P(2, 3) = -2.0 * f * n / (f - n);
-    P(3, 2) = 1.0;
-    return P;
-  }
-
   RenderResult Render(const Camera& camera, const RenderRequest& request) {
     camera.Check();
     request.shading.Check();
@@ -717,23 +670,11 @@ struct MeshRenderer::Impl {
     clear();
     const GLfloat far_depth = 1.0f;
     glClearBufferfv(GL_DEPTH, 0, &far_depth);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    if (request.cull_back_faces) {
-      // Faces are counter-clockwise seen from outside; the y flip in the projection makes them
-      // clockwise in GL window coordinates.
-      glEnable(GL_CULL_FACE);
-      glFrontFace(GL_CW);
-      glCullFace(GL_BACK);
-    } else {
-      glDisable(GL_CULL_FACE);
-    }
-    glDisable(GL_BLEND);
+    render_internal::SetMeshRasterState(request.cull_back_faces, GL_LESS);
 
-    Eigen::Matrix4d cam_from_world = Eigen::Matrix4d::Identity();
-    cam_from_world.topLeftCorner<3, 3>() = camera.rotation;
-    cam_from_world.topRightCorner<3, 1>() = camera.translation;
-    const Eigen::Matrix4d clip_from_world = ClipFromCamera(ideal_K, ideal_width, ideal_height) * cam_from_world;
+    const Eigen::Matrix4d cam_from_world = CamFromWorld(camera);
+    const Eigen::Matrix4d clip_from_world =
+        ClipFromCamera(ideal_K, ideal_width, ideal_height, options.near_m, options.far_m) * cam_from_world;
     const GLuint program = request.color ? color_program : geometry_program;
     glUseProgram(program);
     SetMatrix(program, "clip_from_world", clip_from_world);

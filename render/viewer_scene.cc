@@ -11,9 +11,12 @@
 #include "core/error.h"
 #include "core/mesh_ops.h"
 #include "render/egl_context.h"
+#include "render/gl_program.h"
 
 namespace confluent {
 namespace {
+
+using render_internal::LinkProgram;
 
 constexpr const char* kMeshVertexShader = R"(#version 330 core
 layout(location = 0) in vec3 position;
@@ -91,64 +94,12 @@ out vec4 frag_color;
 void main() { frag_color = v_color; }
 )";
 
-GLuint CompileShader(GLenum type, const char* source) {
-  const GLuint shader = glCreateShader(type);
-  glShaderSource(shader, 1, &source, nullptr);
-  glCompileShader(shader);
-  GLint ok = GL_FALSE;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    char log[2048] = {0};
-    glGetShaderInfoLog(shader, sizeof(log) - 1, nullptr, log);
-    glDeleteShader(shader);
-    throw RenderContextError(std::string("viewer: shader compilation failed: ") + log);
-  }
-  return shader;
-}
-
-GLuint LinkProgram(const char* vertex_source, const char* fragment_source) {
-  const GLuint vertex = CompileShader(GL_VERTEX_SHADER, vertex_source);
-  const GLuint fragment = CompileShader(GL_FRAGMENT_SHADER, fragment_source);
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vertex);
-  glAttachShader(program, fragment);
-  glLinkProgram(program);
-  glDeleteShader(vertex);
-  glDeleteShader(fragment);
-  GLint ok = GL_FALSE;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    char log[2048] = {0};
-    glGetProgramInfoLog(program, sizeof(log) - 1, nullptr, log);
-    glDeleteProgram(program);
-    throw RenderContextError(std::string("viewer: shader link failed: ") + log);
-  }
-  return program;
-}
-
 // cam_from_world as a column-major 4x4.
-Eigen::Matrix4f ViewMatrix(const Camera& view) {
-  Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
-  m.topLeftCorner<3, 3>() = view.rotation.cast<float>();
-  m.topRightCorner<3, 1>() = view.translation.cast<float>();
-  return m;
-}
+Eigen::Matrix4f ViewMatrix(const Camera& view) { return render_internal::CamFromWorld(view).cast<float>(); }
 
-// OpenCV K -> GL clip space. Camera x right, y down, z forward; pixel centre (x, y) of the image
-// maps to the centre of window pixel (x, y) counted from the top-left; depth in [near, far].
+// OpenCV K -> GL clip space for the window (image row 0 at the top of the window).
 Eigen::Matrix4f ProjectionMatrix(const Camera& view, double near_m, double far_m) {
-  const double w = view.width, h = view.height;
-  const Eigen::Matrix3d& K = view.K;
-  Eigen::Matrix4d p = Eigen::Matrix4d::Zero();
-  p(0, 0) = 2.0 * K(0, 0) / w;
-  p(0, 1) = 2.0 * K(0, 1) / w;
-  p(0, 2) = 2.0 * (K(0, 2) + 0.5) / w - 1.0;
-  p(1, 1) = -2.0 * K(1, 1) / h;
-  p(1, 2) = 1.0 - 2.0 * (K(1, 2) + 0.5) / h;
-  p(2, 2) = (far_m + near_m) / (far_m - near_m);
-  p(2, 3) = -2.0 * far_m * near_m / (far_m - near_m);
-  p(3, 2) = 1.0;
-  return p.cast<float>();
+  return render_internal::ClipFromCamera(view.K, view.width, view.height, near_m, far_m, /*flip_y=*/false).cast<float>();
 }
 
 }  // namespace
@@ -198,9 +149,9 @@ ViewerScene::ViewerScene() : impl_(std::make_unique<Impl>()) {
   if (epoxy_gl_version() < 33 || epoxy_is_desktop_gl() == 0)
     throw RenderContextError(std::string("viewer: needs desktop OpenGL >= 3.3, the context has ") +
                              reinterpret_cast<const char*>(version));
-  impl_->mesh_program = LinkProgram(kMeshVertexShader, kMeshFragmentShader);
-  impl_->image_program = LinkProgram(kImageVertexShader, kImageFragmentShader);
-  impl_->rect_program = LinkProgram(kRectVertexShader, kRectFragmentShader);
+  impl_->mesh_program = LinkProgram(kMeshVertexShader, kMeshFragmentShader, "viewer mesh");
+  impl_->image_program = LinkProgram(kImageVertexShader, kImageFragmentShader, "viewer image");
+  impl_->rect_program = LinkProgram(kRectVertexShader, kRectFragmentShader, "viewer overlay");
 
   glGenVertexArrays(1, &impl_->mesh_vao);
   glGenBuffers(4, impl_->mesh_buffers);

@@ -1,6 +1,8 @@
 #include "tracking/fit_params.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <ceres/normal_prior.h>
 
 namespace confluent::tracking_internal {
 
@@ -70,6 +72,48 @@ std::array<SegmentWorld, kNumBodySegments> SegmentsInWorld(const BodyTemplate& b
     w.e2 = w.R * w.frame.e2;
   }
   return out;
+}
+
+std::array<std::vector<int>, kNumBodySegments> SegmentChains(const BodyTemplate& body) {
+  std::array<std::vector<int>, kNumBodySegments> chains;
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    std::vector<int> chain;
+    for (int j = body.segments()[s].joint; j > 0; j = body.parents()[j])
+      if (body.dofs()[j].type != JointType::kFixed) chain.push_back(j);
+    std::reverse(chain.begin(), chain.end());
+    chains[s] = chain;
+  }
+  return chains;
+}
+
+std::vector<double*> AddSegmentParameterBlocks(const BodyTemplate& body, const std::vector<int>& chain, FitParams* fp,
+                                               ceres::DynamicCostFunction* cost) {
+  std::vector<double*> blocks = {fp->root_t, fp->root_aa};
+  cost->AddParameterBlock(3);
+  cost->AddParameterBlock(3);
+  for (int j : chain) {
+    cost->AddParameterBlock(body.dofs()[j].num_dof());
+    blocks.push_back(fp->dofs[j].data());
+  }
+  cost->AddParameterBlock(kShapeBlockSize);
+  blocks.push_back(fp->shape);
+  return blocks;
+}
+
+void AddJointPriorAndLimits(const BodyTemplate& body, int joint, const double* prior_values, double prior_weight,
+                            double* block, ceres::Problem* problem) {
+  const JointDof& dof = body.dofs()[joint];
+  const int n = dof.num_dof();
+  if (prior_weight > 0) {
+    const Eigen::MatrixXd A = Eigen::MatrixXd::Identity(n, n) * prior_weight;
+    const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(prior_values, n);
+    problem->AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, block);
+  }
+  for (int k = 0; k < n; ++k) {
+    block[k] = std::clamp(block[k], dof.lower[k], dof.upper[k]);
+    problem->SetParameterLowerBound(block, k, dof.lower[k]);
+    problem->SetParameterUpperBound(block, k, dof.upper[k]);
+  }
 }
 
 }  // namespace confluent::tracking_internal

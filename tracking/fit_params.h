@@ -2,8 +2,12 @@
 // INTERNAL (tracking/*.cc only): the parameter blocks shared by the template fits (silhouettes
 // and scan registration) and the segments' world frames they imply.
 
+#include <ceres/dynamic_cost_function.h>
+#include <ceres/problem.h>
+
 #include <Eigen/Core>
 #include <array>
+#include <vector>
 
 #include "tracking/body_model_impl.h"
 #include "tracking/body_template.h"
@@ -40,5 +44,18 @@ struct SegmentWorld {
   Eigen::Vector3d P;
 };
 std::array<SegmentWorld, kNumBodySegments> SegmentsInWorld(const BodyTemplate& body, const FitParams& fp);
+
+// The joints with DOFs on the chain from the root to each segment's joint, root first.
+std::array<std::vector<int>, kNumBodySegments> SegmentChains(const BodyTemplate& body);
+
+// Declares the parameter blocks of a segment cost on `cost` (root translation, root rotation,
+// the DOFs of `chain`, the shape) and returns the matching pointers into `fp`.
+std::vector<double*> AddSegmentParameterBlocks(const BodyTemplate& body, const std::vector<int>& chain, FitParams* fp,
+                                               ceres::DynamicCostFunction* cost);
+
+// Joint `joint`'s DOF block: a prior of `prior_weight` (per radian) towards `prior_values`
+// when positive, then the values clamped into the joint limits, which become the bounds.
+void AddJointPriorAndLimits(const BodyTemplate& body, int joint, const double* prior_values, double prior_weight,
+                            double* block, ceres::Problem* problem);
 
 }  // namespace confluent::tracking_internal

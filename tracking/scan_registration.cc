@@ -50,6 +50,7 @@ using ti::kShapeBlockSize;
 using ti::ParamsToPose;
 using ti::ParamsToShape;
 using ti::PoseToParams;
+using ti::SegmentChains;
 using ti::SegmentsInWorld;
 using ti::SegmentWorld;
 using ti::ShapeArrays;
@@ -250,19 +251,6 @@ struct SurfaceCost {
   }
 };
 
-// The joints with DOFs on the chain from the root to each segment's joint, root first.
-std::array<std::vector<int>, kNumBodySegments> SegmentChains(const BodyTemplate& body) {
-  std::array<std::vector<int>, kNumBodySegments> chains;
-  for (int s = 0; s < kNumBodySegments; ++s) {
-    std::vector<int> chain;
-    for (int j = body.segments()[s].joint; j > 0; j = body.parents()[j])
-      if (body.dofs()[j].type != JointType::kFixed) chain.push_back(j);
-    std::reverse(chain.begin(), chain.end());
-    chains[s] = chain;
-  }
-  return chains;
-}
-
 // One round's pairs and residual statistics.
 struct Pairing {
   std::array<SurfaceCost, kNumBodySegments> costs;
@@ -379,15 +367,7 @@ void Solve(const BodyTemplate& body, Pairing* pairing, const ScanRegistrationOpt
     functor->root_reference = fp->root_reference;
     functor->chain_joints = chains[s];
     auto* cost = new ceres::DynamicAutoDiffCostFunction<SurfaceCost, 16>(functor);
-    std::vector<double*> blocks = {fp->root_t, fp->root_aa};
-    cost->AddParameterBlock(3);
-    cost->AddParameterBlock(3);
-    for (int j : chains[s]) {
-      cost->AddParameterBlock(body.dofs()[j].num_dof());
-      blocks.push_back(fp->dofs[j].data());
-    }
-    cost->AddParameterBlock(kShapeBlockSize);
-    blocks.push_back(fp->shape);
+    const std::vector<double*> blocks = ti::AddSegmentParameterBlocks(body, chains[s], fp, cost);
     cost->SetNumResiduals(functor->num_residuals());
     problem.AddResidualBlock(cost, nullptr, blocks);
   }
@@ -400,16 +380,7 @@ void Solve(const BodyTemplate& body, Pairing* pairing, const ScanRegistrationOpt
       problem.SetParameterBlockConstant(block);
       continue;
     }
-    if (options.prior_weight > 0) {
-      Eigen::MatrixXd A = Eigen::MatrixXd::Identity(n, n) * options.prior_weight * scale;
-      Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(prior.dofs[j].data(), n);
-      problem.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, block);
-    }
-    for (int k = 0; k < n; ++k) {
-      block[k] = std::clamp(block[k], body.dofs()[j].lower[k], body.dofs()[j].upper[k]);
-      problem.SetParameterLowerBound(block, k, body.dofs()[j].lower[k]);
-      problem.SetParameterUpperBound(block, k, body.dofs()[j].upper[k]);
-    }
+    ti::AddJointPriorAndLimits(body, j, prior.dofs[j].data(), options.prior_weight * scale, block, &problem);
   }
   if (fit_shape && !rigid) {
     Eigen::MatrixXd A = Eigen::MatrixXd::Identity(kShapeBlockSize, kShapeBlockSize) * options.shape_prior_weight * scale;

@@ -270,15 +270,7 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
   problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   const auto segments = SegmentsInWorld(body, *fp);
-  // Chains of each segment.
-  std::array<std::vector<int>, kNumBodySegments> chains;
-  for (int s = 0; s < kNumBodySegments; ++s) {
-    std::vector<int> chain;
-    for (int j = body.segments()[s].joint; j > 0; j = body.parents()[j])
-      if (body.dofs()[j].type != JointType::kFixed) chain.push_back(j);
-    std::reverse(chain.begin(), chain.end());
-    chains[s] = chain;
-  }
+  const auto chains = ti::SegmentChains(body);
   const Vector3d body_center = segments[int(BodySegment::kLowerTorso)].a;
   std::array<Vector3d, kNumTemplateJoints> fixed_rest;
   {
@@ -335,15 +327,7 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
         }
         const int num_residuals = kind == 0 ? static_cast<int>(functor->samples.size()) : static_cast<int>(functor->rays.size());
         auto* cost = new ceres::DynamicAutoDiffCostFunction<SegmentCost, 18>(functor);
-        std::vector<double*> blocks = {fp->root_t, fp->root_aa};
-        cost->AddParameterBlock(3);
-        cost->AddParameterBlock(3);
-        for (int j : chains[s]) {
-          cost->AddParameterBlock(body.dofs()[j].num_dof());
-          blocks.push_back(fp->dofs[j].data());
-        }
-        cost->AddParameterBlock(kShapeBlockSize);
-        blocks.push_back(fp->shape);
+        const std::vector<double*> blocks = ti::AddSegmentParameterBlocks(body, chains[s], fp, cost);
         cost->SetNumResiduals(num_residuals);
         ceres::LossFunction* loss = kind == 0 ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(options.model_to_image_loss_px))
                                               : new ceres::CauchyLoss(options.image_to_model_loss_px);
@@ -361,16 +345,7 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
       problem.SetParameterBlockConstant(block);
       continue;
     }
-    if (options.prior_weight > 0) {
-      Eigen::MatrixXd A = Eigen::MatrixXd::Identity(n, n) * options.prior_weight;
-      Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(prior.dofs[j].data(), n);
-      problem.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, block);
-    }
-    for (int k = 0; k < n; ++k) {
-      block[k] = std::clamp(block[k], body.dofs()[j].lower[k], body.dofs()[j].upper[k]);
-      problem.SetParameterLowerBound(block, k, body.dofs()[j].lower[k]);
-      problem.SetParameterUpperBound(block, k, body.dofs()[j].upper[k]);
-    }
+    ti::AddJointPriorAndLimits(body, j, prior.dofs[j].data(), options.prior_weight, block, &problem);
   }
   if (!options.fit_pose) {
     problem.SetParameterBlockConstant(fp->root_t);

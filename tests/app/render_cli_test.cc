@@ -18,16 +18,6 @@ namespace confluent {
 namespace {
 namespace fs = std::filesystem;
 
-std::string Capture(const std::string& command) {
-  std::string output;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return output;
-  char buffer[256];
-  while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) output += buffer;
-  pclose(pipe);
-  return output;
-}
-
 bool HaveFfmpeg() { return std::system("ffmpeg -version >/dev/null 2>&1 && ffprobe -version >/dev/null 2>&1") == 0; }
 
 // A capture of 5 frames and a run with the sphere's mesh for frames 0, 1, 3, 4 (2 is missing).
@@ -73,7 +63,7 @@ TEST(RenderCommand, OrbitWritesPngsAndMp4AndListsMissingFrames) {
   EXPECT_EQ(frame.width, 64);
   EXPECT_EQ(frame.height, 48);
   if (!mp4) GTEST_SKIP() << "ffmpeg/ffprobe not installed: MP4 not checked";
-  const std::string probe = Capture("ffprobe -v error -select_streams v:0 -count_frames -show_entries "
+  const std::string probe = testing::CaptureOutput("ffprobe -v error -select_streams v:0 -count_frames -show_entries "
                                     "stream=codec_name,nb_read_frames,width,height -of default=noprint_wrappers=1 '" +
                                     (f.dir / "out/orbit.mp4") + "'");
   EXPECT_NE(probe.find("codec_name=h264"), std::string::npos) << probe;

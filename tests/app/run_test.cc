@@ -141,8 +141,11 @@ TEST_F(RunCommandTest, KilledRunResumesWithoutRecomputingFinishedFrames) {
   const auto finished_times = ModificationTimes(run);
   const testing::CommandResult third = RunConfluent(RunArgs(run));
   ASSERT_EQ(third.exit_code, 0) << third.stderr_text;
-  for (const auto& [file, time] : ModificationTimes(run))
-    if (file.rfind("scan/", 0) == 0 || file.rfind("renders/orbit/", 0) == 0) EXPECT_EQ(finished_times.at(file), time) << file;
+  for (const auto& [file, time] : ModificationTimes(run)) {
+    if (file.rfind("scan/", 0) == 0 || file.rfind("renders/orbit/", 0) == 0) {
+      EXPECT_EQ(finished_times.at(file), time) << file;
+    }
+  }
 }
 
 TEST_F(RunCommandTest, WrongExcludedCameraNameIsRefused) {
@@ -208,9 +211,11 @@ TEST_F(RunCommandTest, WriteFailureIsReportedAndFinishedFilesAreKept) {
   EXPECT_NE(result.stderr_text.find("error"), std::string::npos) << result.stderr_text;
   EXPECT_EQ(CountFiles(run + "/masks/cam00", ".png"), 10);
   // No partial file is left under a final name.
-  for (const auto& entry : fs::recursive_directory_iterator(run))
-    if (entry.path().extension() == ".ply")
+  for (const auto& entry : fs::recursive_directory_iterator(run)) {
+    if (entry.path().extension() == ".ply") {
       EXPECT_EQ(RunConfluent({"mesh", "info", entry.path().string()}).exit_code, 0) << entry.path();
+    }
+  }
 }
 
 }  // namespace

@@ -14,17 +14,6 @@
 namespace confluent {
 namespace {
 
-// Runs a shell command and returns its stdout ("" when it could not run).
-std::string Capture(const std::string& command) {
-  std::string output;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return output;
-  char buffer[256];
-  while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) output += buffer;
-  pclose(pipe);
-  return output;
-}
-
 bool HaveFfprobe() { return std::system("ffprobe -version >/dev/null 2>&1") == 0; }
 
 // Frame k: flat grey 20*k with a red square in the top-left corner.
@@ -56,7 +45,7 @@ TEST(VideoWriter, WritesH264Mp4WithExpectedFramesAndDuration) {
   ASSERT_TRUE(std::filesystem::exists(path));
   EXPECT_EQ(writer.frames_written(), 10);
 
-  const std::string probe = Capture(
+  const std::string probe = testing::CaptureOutput(
       "ffprobe -v error -select_streams v:0 -count_frames -show_entries "
       "stream=codec_name,pix_fmt,width,height,nb_read_frames -of default=noprint_wrappers=1 '" + path + "'");
   EXPECT_NE(probe.find("codec_name=h264"), std::string::npos) << probe;
@@ -65,7 +54,7 @@ TEST(VideoWriter, WritesH264Mp4WithExpectedFramesAndDuration) {
   EXPECT_NE(probe.find("height=48"), std::string::npos) << probe;
   EXPECT_NE(probe.find("nb_read_frames=10"), std::string::npos) << probe;
   const double duration =
-      std::atof(Capture("ffprobe -v error -show_entries format=duration -of csv=p=0 '" + path + "'").c_str());
+      std::atof(testing::CaptureOutput("ffprobe -v error -show_entries format=duration -of csv=p=0 '" + path + "'").c_str());
   EXPECT_NEAR(duration, 1.0, 0.05);
 
   // Decoded content: frame 5 is grey 100 with red in the corner (lossy, so within a few levels).
@@ -87,7 +76,7 @@ TEST(VideoWriter, OddSizeIsPaddedAndGreyIsAccepted) {
     frames.push_back(grey);
   }
   WriteVideo(path, frames);
-  const std::string probe = Capture(
+  const std::string probe = testing::CaptureOutput(
       "ffprobe -v error -select_streams v:0 -count_frames -show_entries stream=width,height,nb_read_frames "
       "-of default=noprint_wrappers=1 '" + path + "'");
   EXPECT_NE(probe.find("width=34"), std::string::npos) << probe;

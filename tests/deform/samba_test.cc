@@ -49,11 +49,7 @@ TEST(SambaRealMotion, MoreCorrespondencesReduceTheError) {
   const std::string archive = testing::SharedDataPath("meshseq/vlasic_samba.tar.xz");
   if (archive.empty()) GTEST_SKIP() << "shared data meshseq/vlasic_samba.tar.xz not available";
   testing::TempDir dir;
-  ASSERT_EQ(std::system(("tar xJf '" + archive + "' -C '" + dir.path() + "'").c_str()), 0);
-  std::vector<std::string> files;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir.path()))
-    if (entry.path().extension() == ".obj") files.push_back(entry.path().string());
-  std::sort(files.begin(), files.end());
+  const std::vector<std::string> files = testing::ExtractSambaSequence(dir.path());
   ASSERT_EQ(files.size(), 175u);
   // Every 5th frame keeps the test short; CONFLUENT_SAMBA_STRIDE=1 measures all 175.
   const char* stride_text = std::getenv("CONFLUENT_SAMBA_STRIDE");

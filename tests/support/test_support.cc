@@ -3,7 +3,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -57,6 +60,28 @@ CommandResult RunConfluent(const std::vector<std::string>& args, const std::stri
   result.stdout_text = Slurp(scratch / "out");
   result.stderr_text = Slurp(scratch / "err");
   return result;
+}
+
+std::string CaptureOutput(const std::string& shell_command) {
+  std::string output;
+  FILE* pipe = popen(shell_command.c_str(), "r");
+  if (pipe == nullptr) return output;
+  char buffer[256];
+  while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) output += buffer;
+  pclose(pipe);
+  return output;
+}
+
+std::vector<std::string> ExtractSambaSequence(const std::string& dir) {
+  const std::string archive = SharedDataPath("meshseq/vlasic_samba.tar.xz");
+  if (archive.empty()) return {};
+  if (std::system(("tar xJf " + ShellQuote(archive) + " -C " + ShellQuote(dir)).c_str()) != 0)
+    throw std::runtime_error("cannot extract " + archive);
+  std::vector<std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(dir))
+    if (entry.path().extension() == ".obj") files.push_back(entry.path().string());
+  std::sort(files.begin(), files.end());
+  return files;
 }
 
 std::string SharedDataPath(const std::string& relative) {

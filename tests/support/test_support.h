@@ -31,6 +31,14 @@ struct CommandResult {
 // is run by the same shell just before it (e.g. "ulimit -f 100;" to simulate a full disk).
 CommandResult RunConfluent(const std::vector<std::string>& args, const std::string& shell_prefix = "");
 
+// Runs a shell command and returns its stdout ("" when it could not run).
+std::string CaptureOutput(const std::string& shell_command);
+
+// Extracts the real samba mesh sequence (shared data meshseq/vlasic_samba.tar.xz) into `dir` and
+// returns its .obj files in name order; empty when the archive is not available. Throws
+// std::runtime_error when the archive is present but cannot be extracted.
+std::vector<std::string> ExtractSambaSequence(const std::string& dir);
+
 // Absolute path of ../shared/data/<relative>, or "" when it does not exist. Tests call
 // GTEST_SKIP() with a message when this is empty.
 std::string SharedDataPath(const std::string& relative);
