@@ -97,8 +97,6 @@ double Min(const std::vector<double>& values) {
   return best;
 }
 
-nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-
 std::string Csv(double v) {
   if (!std::isfinite(v)) return "";
   char text[32];
@@ -169,7 +167,6 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
                                            std::to_string(missing.front()));
 
   std::optional<ProjectiveTexturer> scan_texturer, template_texturer;
-  Mesh scan_colours;
   if (has_scan) {
     const Mesh first = ReadMesh(run.ScanPath(range.first));
     scan_texturer.emplace(first);
@@ -285,13 +282,13 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
                     "template_psnr_db,template_ssim,scan_psnr_box_db,template_psnr_box_db,scan_vertex_error_m\n";
   for (const Row& r : rows) {
     json["rows"].push_back({{"camera", r.camera}, {"frame", r.frame},
-                            {"scan", {{"iou", Number(r.scan.iou)}, {"xor_percent", Number(r.scan.xor_percent)},
-                                      {"psnr_db", Number(r.scan.psnr_db)}, {"ssim", Number(r.scan.ssim)},
-                                      {"psnr_box_db", Number(r.scan.psnr_box_db)}}},
-                            {"template", {{"iou", Number(r.templ.iou)}, {"xor_percent", Number(r.templ.xor_percent)},
-                                          {"psnr_db", Number(r.templ.psnr_db)}, {"ssim", Number(r.templ.ssim)},
-                                          {"psnr_box_db", Number(r.templ.psnr_box_db)}}},
-                            {"scan_vertex_error_m", Number(r.vertex_error_m)}});
+                            {"scan", {{"iou", JsonNumber(r.scan.iou)}, {"xor_percent", JsonNumber(r.scan.xor_percent)},
+                                      {"psnr_db", JsonNumber(r.scan.psnr_db)}, {"ssim", JsonNumber(r.scan.ssim)},
+                                      {"psnr_box_db", JsonNumber(r.scan.psnr_box_db)}}},
+                            {"template", {{"iou", JsonNumber(r.templ.iou)}, {"xor_percent", JsonNumber(r.templ.xor_percent)},
+                                          {"psnr_db", JsonNumber(r.templ.psnr_db)}, {"ssim", JsonNumber(r.templ.ssim)},
+                                          {"psnr_box_db", JsonNumber(r.templ.psnr_box_db)}}},
+                            {"scan_vertex_error_m", JsonNumber(r.vertex_error_m)}});
     csv += r.camera + "," + std::to_string(r.frame) + "," + Csv(r.scan.iou) + "," + Csv(r.scan.xor_percent) + "," +
            Csv(r.scan.psnr_db) + "," + Csv(r.scan.ssim) + "," + Csv(r.templ.iou) + "," + Csv(r.templ.xor_percent) + "," +
            Csv(r.templ.psnr_db) + "," + Csv(r.templ.ssim) + "," + Csv(r.scan.psnr_box_db) + "," +

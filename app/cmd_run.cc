@@ -80,11 +80,12 @@ void RecordRun(const RunInputs& inputs, const ParsedArgs& args, const nlohmann::
   WriteTextFile(path, json.dump(1) + "\n");
 }
 
-// Refuses, before any work, a scan the deformation cannot animate well: unreadable, non-finite,
-// non-manifold or (unless allowed) with holes.
-void CheckScan(const std::string& path, bool allow_open) {
+// Reads the scan, refusing before any work one the deformation cannot animate well: unreadable,
+// non-finite, non-manifold or (unless allowed) with holes.
+Mesh ReadCheckedScan(const std::string& path, bool allow_open) {
   if (!fs::exists(path)) throw InputError(path, "scan not found");
-  const MeshReport report = ValidateMesh(ReadMesh(path));
+  Mesh scan = ReadMesh(path);
+  const MeshReport report = ValidateMesh(scan);
   if (report.num_faces == 0) throw InputError(path, "the scan has no faces");
   if (!report.invalid_vertices.empty())
     throw InputError(path, std::to_string(report.invalid_vertices.size()) + " vertices with NaN or infinite coordinates");
@@ -96,6 +97,7 @@ void CheckScan(const std::string& path, bool allow_open) {
     throw InputError(path, "the scan is not watertight (" + std::to_string(report.num_boundary_edges) + " boundary edges in " +
                                std::to_string(report.num_boundary_loops) +
                                " holes); close the holes, or pass --allow-open-scan to animate it anyway");
+  return scan;
 }
 
 void PrintReport(const StageReport& report) {
@@ -130,7 +132,11 @@ int RunRun(const ParsedArgs& args, const Context& context) {
   inputs.masks_dir = args.get("masks");
   if (!inputs.masks_dir.empty() && !fs::is_directory(inputs.masks_dir)) throw InputError(inputs.masks_dir, "masks folder not found");
   inputs.scan_path = args.has("no-scan") ? "" : args.get("scan", capture.scan_path());
-  if (!inputs.scan_path.empty()) CheckScan(inputs.scan_path, args.has("allow-open-scan"));
+  Mesh scan;
+  if (!inputs.scan_path.empty()) {
+    scan = ReadCheckedScan(inputs.scan_path, args.has("allow-open-scan"));
+    inputs.scan = &scan;
+  }
   inputs.correspondences_path = args.get("correspondences", capture.correspondences_path());
   if (!inputs.correspondences_path.empty() && !fs::exists(inputs.correspondences_path))
     throw InputError(inputs.correspondences_path, "correspondences file not found");
@@ -159,7 +165,7 @@ int RunRun(const ParsedArgs& args, const Context& context) {
   PrintReport(RunSilhouetteStage(inputs, context.make_progress(), &timings));
   BodyShape shape;
   PrintReport(RunTrackingStage(inputs, body, context.make_progress(), &timings, &shape));
-  if (!inputs.scan_path.empty()) {
+  if (inputs.scan != nullptr) {
     PrintReport(RunCorrespondenceStage(inputs, body, shape, &timings));
     PrintReport(RunDeformStage(inputs, context.make_progress(), &timings));
   }

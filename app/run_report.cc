@@ -14,13 +14,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 double FromJson(const nlohmann::json& v) { return v.is_number() ? v.get<double>() : NAN; }
 
 nlohmann::json ScoresJson(const GeometryScores& s) {
-  return {{"iou_mean", Number(s.iou_mean)},     {"iou_min", Number(s.iou_min)},
-          {"xor_percent_mean", Number(s.xor_percent_mean)}, {"psnr_db_mean", Number(s.psnr_db_mean)},
-          {"ssim_mean", Number(s.ssim_mean)}, {"psnr_box_db_mean", Number(s.psnr_box_db_mean)}};
+  return {{"iou_mean", JsonNumber(s.iou_mean)},     {"iou_min", JsonNumber(s.iou_min)},
+          {"xor_percent_mean", JsonNumber(s.xor_percent_mean)}, {"psnr_db_mean", JsonNumber(s.psnr_db_mean)},
+          {"ssim_mean", JsonNumber(s.ssim_mean)}, {"psnr_box_db_mean", JsonNumber(s.psnr_box_db_mean)}};
 }
 
 GeometryScores ScoresFromJson(const nlohmann::json& j) {
@@ -43,6 +42,10 @@ std::string Escape(const std::string& text) {
 
 }  // namespace
 
+nlohmann::json JsonNumber(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
 nlohmann::json EvaluationSummary::ToJson() const {
   nlohmann::json json;
   json["format"] = "confluent.metrics/1";
@@ -52,7 +55,7 @@ nlohmann::json EvaluationSummary::ToJson() const {
                     "psnr_box: PSNR in the bounding box of the union, pixels outside the union black in both images";
   if (has_scan) json["scan"] = ScoresJson(scan);
   json["template"] = ScoresJson(templ);
-  json["scan_vertex_error_mean_m"] = Number(vertex_error_mean_m);
+  json["scan_vertex_error_mean_m"] = JsonNumber(vertex_error_mean_m);
   json["warnings"] = warnings;
   return json;
 }

@@ -11,6 +11,9 @@
 
 namespace confluent::app {
 
+// A JSON number, or null for NaN/infinite values (metrics that could not be computed).
+nlohmann::json JsonNumber(double value);
+
 // Mean scores of one geometry (the animated scan or the template) over held-out cameras and frames.
 struct GeometryScores {
   double iou_mean = 0.0;

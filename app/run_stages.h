@@ -9,6 +9,7 @@
 #include "app/frame_range.h"
 #include "app/run_folder.h"
 #include "calib/capture.h"
+#include "core/mesh.h"
 #include "core/progress.h"
 #include "tracking/body_template.h"
 
@@ -22,6 +23,7 @@ struct RunInputs {
   std::vector<bool> excluded;        // per rig camera: held out, never used
   std::string masks_dir;             // given masks (<dir>/<cam>/<frame>.png); empty: extract into the run
   std::string scan_path;             // empty: the 3D video uses the template
+  const Mesh* scan = nullptr;        // the scan read from scan_path once (null without a scan)
   std::string correspondences_path;  // empty: automatic registration and correspondences
   int threads = 2;
 };

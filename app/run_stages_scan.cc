@@ -29,7 +29,7 @@ StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& 
     report.skipped = 1;
     return report;
   }
-  const Mesh scan = ReadMesh(inputs.scan_path);
+  const Mesh& scan = *inputs.scan;
   // The template in the scan's reference pose, with the tracked shape: the rotations of the
   // tracked frames are then measured from the pose the scan stands in.
   ScanRegistrationOptions options;
@@ -78,7 +78,7 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   }
   if (todo.empty()) return report;
 
-  const Mesh scan = ReadMesh(inputs.scan_path);
+  const Mesh& scan = *inputs.scan;
   const std::string reference_path = folder.Path("template_reference.ply");
   const std::string correspondences_path = folder.Path("correspondences.json");
   const Mesh reference = ReadMesh(reference_path);
@@ -144,7 +144,7 @@ StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& op
   const RunFolder& folder = inputs.folder;
   const Capture& capture = *inputs.capture;
   const Rig& rig = capture.rig();
-  const bool use_scan = !inputs.scan_path.empty();
+  const bool use_scan = inputs.scan != nullptr;
   auto geometry_path = [&](int frame) { return use_scan ? folder.ScanPath(frame) : folder.TemplatePath(frame); };
 
   std::vector<int> used;
@@ -171,11 +171,8 @@ StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& op
     }
   }
   if (!todo.empty()) {
-    const Mesh first_mesh = ReadMesh(geometry_path(todo.front()));
-    const Mesh colours = use_scan ? ReadMesh(inputs.scan_path) : first_mesh;
-    Mesh textured = first_mesh;
-    textured.colors = colours.colors;
-    ProjectiveTexturer texturer(textured);
+    // Topology and colours: the scan's own, or the posed template's.
+    ProjectiveTexturer texturer(use_scan ? *inputs.scan : ReadMesh(geometry_path(todo.front())));
     fs::create_directories(folder.Path("renders/" + options.view));
     int done = 0;
     for (int frame : todo) {
