@@ -7,6 +7,7 @@ date and commit. Usage: ./dev bench  [--repetitions N] [--filter REGEX]
 import argparse
 import datetime
 import json
+import math
 import os
 import platform
 import subprocess
@@ -44,6 +45,35 @@ def format_time(value, unit):
     return f"{value:.3f} {unit}"
 
 
+def problem_size(entry):
+    """The size a benchmark instance works on: its `triangles` counter, else its first numeric argument."""
+    if isinstance(entry.get("triangles"), (int, float)):
+        return float(entry["triangles"])
+    parts = entry["run_name"].split("/")
+    return float(parts[1]) if len(parts) > 1 and parts[1].isdigit() else None
+
+
+def scaling_exponents(entries):
+    """Least-squares slope of log(median wall time) against log(size) for every benchmark family
+    with at least 3 sizes: time ~ size^exponent."""
+    families = {}
+    for entry in entries:
+        size = problem_size(entry)
+        if size and entry["real_time"] > 0:
+            families.setdefault(entry["run_name"].split("/")[0], []).append((size, entry["real_time"]))
+    result = []
+    for family, points in families.items():
+        if len({size for size, _ in points}) < 3:
+            continue
+        xs = [math.log(size) for size, _ in points]
+        ys = [math.log(time) for _, time in points]
+        mean_x, mean_y = sum(xs) / len(xs), sum(ys) / len(ys)
+        slope = (sum((x - mean_x) * (y - mean_y) for x, y in zip(xs, ys)) /
+                 sum((x - mean_x) ** 2 for x in xs))
+        result.append((family, len(points), min(size for size, _ in points), max(size for size, _ in points), slope))
+    return result
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--build", required=True)
@@ -63,12 +93,12 @@ def main():
         print("running", program, file=sys.stderr)
         result = subprocess.run(command, capture_output=True, text=True)
         if result.returncode != 0:
-            sections.append((program, [], f"failed: {result.stderr.strip()[-500:]}"))
+            sections.append((program, [], f"failed: {result.stderr.strip()[-500:]}", []))
             continue
         rows = []
-        for entry in json.loads(result.stdout)["benchmarks"]:
-            if entry.get("aggregate_name") != "median":
-                continue
+        medians = [entry for entry in json.loads(result.stdout)["benchmarks"]
+                   if entry.get("aggregate_name") == "median"]
+        for entry in medians:
             counters = {k: v for k, v in entry.items()
                         if k not in ("name", "run_name", "run_type", "repetitions", "repetition_index",
                                      "threads", "aggregate_name", "aggregate_unit", "iterations",
@@ -77,14 +107,14 @@ def main():
             rows.append((entry["run_name"], format_time(entry["real_time"], entry["time_unit"]),
                          format_time(entry["cpu_time"], entry["time_unit"]),
                          ", ".join(f"{k}={v:.4g}" for k, v in counters.items() if isinstance(v, (int, float)))))
-        sections.append((program, rows, ""))
+        sections.append((program, rows, "", scaling_exponents(medians)))
     lines = ["# Benchmark results", "",
              f"- Machine: {machine_description()}",
              f"- Date: {datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}",
              f"- Commit: {commit(root)}",
              f"- Figures: medians over {args.repetitions} repetitions (Google Benchmark), wall and CPU time.",
              "- Produced by `./dev bench` (bench/run_benchmarks.py).", ""]
-    for program, rows, error in sections:
+    for program, rows, error, scaling in sections:
         lines += [f"## {program}", ""]
         if error:
             lines += [error, ""]
@@ -92,6 +122,12 @@ def main():
         lines += ["| benchmark | median wall | median CPU | counters |", "|---|---|---|---|"]
         lines += [f"| {n} | {w} | {c} | {k} |" for n, w, c, k in rows]
         lines.append("")
+        if scaling:
+            lines += ["Scaling: median wall time ~ size^exponent (least squares on log-log; size is the "
+                      "`triangles` counter, else the first argument).", "",
+                      "| family | sizes | smallest | largest | exponent |", "|---|---|---|---|---|"]
+            lines += [f"| {f} | {n} | {lo:.4g} | {hi:.4g} | {e:.2f} |" for f, n, lo, hi, e in scaling]
+            lines.append("")
     with open(os.path.join(root, "bench", "RESULTS.md"), "w") as f:
         f.write("\n".join(lines))
     print("wrote bench/RESULTS.md", file=sys.stderr)

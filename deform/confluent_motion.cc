@@ -3,11 +3,13 @@
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
 #include <map>
+#include <queue>
 #include <stdexcept>
 #include <thread>
 
@@ -84,6 +86,74 @@ Eigen::Matrix3d Corners(const RowMatrixX3d& vertices, const RowMatrixX3i& faces,
   return corners;
 }
 
+// The Laplace equation with Dirichlet values at `constrained` vertices, reduced to the free ones:
+// L_ff x_f = -L_fc x_c. Factor() fills everything; solve with factor and minus_l_fc.
+struct DirichletSystem {
+  std::vector<int> constrained, free_vertices;  // scan vertex ids
+  Eigen::SparseMatrix<double> minus_l_fc;       // n_f x n_c
+  SparseCholesky factor;                        // of L_ff; empty when every vertex is constrained
+
+  // Returns false (with factor.message()) when L_ff cannot be factored.
+  bool Factor(const Eigen::SparseMatrix<double>& laplacian, const std::vector<int>& constrained_vertices, int threads) {
+    const int n = static_cast<int>(laplacian.rows());
+    constrained = constrained_vertices;
+    free_vertices.clear();
+    std::vector<int> constrained_index(n, -1), free_index(n, -1);
+    for (std::size_t i = 0; i < constrained.size(); ++i) constrained_index[constrained[i]] = static_cast<int>(i);
+    for (int v = 0; v < n; ++v)
+      if (constrained_index[v] < 0) {
+        free_index[v] = static_cast<int>(free_vertices.size());
+        free_vertices.push_back(v);
+      }
+    const int num_free = static_cast<int>(free_vertices.size());
+    std::vector<Eigen::Triplet<double>> ff, fc;
+    for (int col = 0; col < laplacian.outerSize(); ++col)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(laplacian, col); it; ++it) {
+        const int row = static_cast<int>(it.row());
+        if (free_index[row] < 0) continue;
+        if (free_index[col] >= 0)
+          ff.emplace_back(free_index[row], free_index[col], it.value());
+        else
+          fc.emplace_back(free_index[row], constrained_index[col], -it.value());
+      }
+    Eigen::SparseMatrix<double> l_ff(num_free, num_free);
+    l_ff.setFromTriplets(ff.begin(), ff.end());
+    minus_l_fc.resize(num_free, static_cast<int>(constrained.size()));
+    minus_l_fc.setFromTriplets(fc.begin(), fc.end());
+    factor = SparseCholesky();
+    if (num_free > 0 && factor.Factor(l_ff) != CholeskyStatus::kOk) return false;
+    factor.set_threads(threads);
+    return true;
+  }
+
+  // Fills `field` (n x k) with the harmonic interpolation of `values` (n_c x k) given at the
+  // constrained vertices.
+  template <typename Field>
+  void Solve(const Eigen::MatrixXd& values, Field* field) const {
+    for (std::size_t i = 0; i < constrained.size(); ++i) field->row(constrained[i]) = values.row(i);
+    if (free_vertices.empty()) return;
+    const Eigen::MatrixXd at_free = factor.Solve(Eigen::MatrixXd(minus_l_fc * values));
+    for (std::size_t i = 0; i < free_vertices.size(); ++i) field->row(free_vertices[i]) = at_free.row(i);
+  }
+};
+
+// Spherical linear interpolation from a (t = 0) to b (t = 1) along the great circle through
+// them as given (no sign flip: with continuous signs the long way round is the intended one).
+Eigen::Vector4d Slerp(const Eigen::Vector4d& a, const Eigen::Vector4d& b, double t) {
+  const double cosine = std::clamp(a.dot(b) / (a.norm() * b.norm()), -1.0, 1.0);
+  const double angle = std::acos(cosine);
+  if (std::sin(angle) < 1e-6) return ((1.0 - t) * a + t * b).normalized();  // (anti)parallel
+  return (std::sin((1.0 - t) * angle) * a + std::sin(t * angle) * b) / std::sin(angle);
+}
+
+// One scan vertex on a SLERP path: its quaternion is Slerp(q[from_pair], q[to_pair], t).
+struct PathVertex {
+  int vertex = -1;
+  int from_pair = -1;  // the well-conditioned pair the path starts at
+  int to_pair = -1;    // the near-180-degree pair it ends at
+  double t = 0.0;
+};
+
 }  // namespace
 
 struct ConfluentMotion::Impl {
@@ -106,10 +176,16 @@ struct ConfluentMotion::Impl {
   std::vector<Eigen::Vector3d> scan_centroid_ref, template_centroid_ref;
   std::vector<int> align_order, align_parent;  // spanning tree over pairs for sign alignment
   // Harmonic system.
-  std::vector<int> constrained, free_vertices;  // scan vertex ids
   Eigen::SparseMatrix<double> average;     // n_c x m: Dirichlet value of each constrained vertex
-  Eigen::SparseMatrix<double> harmonic_rhs;  // n_f x m: -L_fc * average
-  SparseCholesky harmonic;
+  DirichletSystem harmonic;
+  // SLERP paths (options.slerp_paths): the Laplacian is kept to refactor with the path vertices
+  // constrained; `path_pairs` is the set of near-180-degree pairs the paths were built for.
+  Eigen::SparseMatrix<double> laplacian;
+  std::vector<std::vector<std::pair<int, double>>> edges_of_vertex;  // neighbour, edge length
+  std::vector<int> path_pairs;
+  std::vector<PathVertex> path_vertices;
+  std::vector<std::vector<int>> path_vertices_at;  // per extra constrained vertex: path_vertices ids
+  DirichletSystem path_harmonic;
   // Segment weight fields (n x s), when all pairs are labelled.
   std::vector<int> segment_of_pair;
   int num_segments = 0;
@@ -133,6 +209,95 @@ struct ConfluentMotion::Impl {
   int intermediate_frame = -1;
   RowMatrixX3d intermediate_template;
   RowMatrixX4d intermediate_face_rotations;
+
+  // Rebuilds the SLERP paths and their harmonic system when the set of near-180-degree pairs
+  // (w of `q` below options.singular_w) differs from the one they were built for. Returns the
+  // number of path-constrained vertices (0 when no path could be built; `warnings` says why).
+  int UpdateSlerpPaths(const std::vector<Eigen::Vector4d>& q, std::vector<std::string>* warnings) {
+    const int m = static_cast<int>(pairs.size());
+    std::vector<int> singular;
+    for (int k = 0; k < m; ++k)
+      if (q[k](0) < options.singular_w) singular.push_back(k);
+    if (singular == path_pairs) return static_cast<int>(path_vertices_at.size());
+    path_pairs = singular;
+    path_vertices.clear();
+    path_vertices_at.clear();
+    const int n = static_cast<int>(scan_vertices.rows());
+    if (edges_of_vertex.empty()) {
+      edges_of_vertex.resize(n);
+      for (int f = 0; f < scan_faces.rows(); ++f)
+        for (int k = 0; k < 3; ++k) {
+          const int a = scan_faces(f, k), b = scan_faces(f, (k + 1) % 3);
+          const double length = (scan_vertices.row(a) - scan_vertices.row(b)).norm();
+          edges_of_vertex[a].emplace_back(b, length);
+          edges_of_vertex[b].emplace_back(a, length);
+        }
+    }
+    // Multi-source Dijkstra from the well-conditioned pairs' scan triangles.
+    std::vector<double> distance(n, std::numeric_limits<double>::infinity());
+    std::vector<int> previous(n, -1), source_pair(n, -1);
+    using Entry = std::pair<double, int>;
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+    std::vector<char> is_singular(m, 0);
+    for (int k : singular) is_singular[k] = 1;
+    for (int k = 0; k < m; ++k)
+      if (!is_singular[k])
+        for (int c = 0; c < 3; ++c) {
+          const int v = scan_faces(pairs[k].scan_triangle, c);
+          if (distance[v] == 0.0) continue;
+          distance[v] = 0.0;
+          source_pair[v] = k;
+          queue.emplace(0.0, v);
+        }
+    if (queue.empty()) {
+      warnings->push_back("every constraint rotation is near 180 degrees: no SLERP path can start anywhere");
+      return 0;
+    }
+    while (!queue.empty()) {
+      const auto [d, v] = queue.top();
+      queue.pop();
+      if (d > distance[v]) continue;
+      for (const auto& [w, length] : edges_of_vertex[v])
+        if (d + length < distance[w]) {
+          distance[w] = d + length;
+          previous[w] = v;
+          source_pair[w] = source_pair[v];
+          queue.emplace(distance[w], w);
+        }
+    }
+    // Each path: from the singular triangle's nearest corner back to a source.
+    std::vector<char> constrained(n, 0);
+    for (int v : harmonic.constrained) constrained[v] = 1;
+    std::map<int, int> extra_index;  // scan vertex -> row among the extra constrained vertices
+    std::vector<int> extra;
+    for (int k : singular) {
+      int start = scan_faces(pairs[k].scan_triangle, 0);
+      for (int c = 1; c < 3; ++c)
+        if (distance[scan_faces(pairs[k].scan_triangle, c)] < distance[start]) start = scan_faces(pairs[k].scan_triangle, c);
+      if (!std::isfinite(distance[start]) || !(distance[start] > 0.0)) continue;
+      for (int v = start; v >= 0 && distance[v] > 0.0; v = previous[v]) {
+        if (constrained[v]) continue;
+        const auto inserted = extra_index.emplace(v, static_cast<int>(extra.size()));
+        if (inserted.second) {
+          extra.push_back(v);
+          path_vertices_at.emplace_back();
+        }
+        path_vertices_at[inserted.first->second].push_back(static_cast<int>(path_vertices.size()));
+        path_vertices.push_back({v, source_pair[start], k, distance[v] / distance[start]});
+      }
+    }
+    if (extra.empty()) return 0;
+    std::vector<int> all = harmonic.constrained;
+    all.insert(all.end(), extra.begin(), extra.end());
+    if (!path_harmonic.Factor(laplacian, all, options.threads)) {
+      warnings->push_back("the harmonic system with SLERP path constraints cannot be factored: " +
+                          path_harmonic.factor.message());
+      path_vertices.clear();
+      path_vertices_at.clear();
+      return 0;
+    }
+    return static_cast<int>(extra.size());
+  }
 
   std::vector<Eigen::Quaterniond> ConstraintRotations(const RowMatrixX3d& from, const RowMatrixX3d& to,
                                                       std::vector<int>* degenerate) const {
@@ -276,7 +441,7 @@ ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_referenc
   }
 
   // Harmonic system: Dirichlet values at the correspondence triangles' vertices.
-  std::vector<int> constrained_index(n, -1);
+  std::vector<int> constrained_index(n, -1), constrained;
   {
     std::vector<Eigen::Triplet<double>> entries;
     std::vector<double> weight_sum;
@@ -284,46 +449,23 @@ ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_referenc
       for (int c = 0; c < 3; ++c) {
         const int v = s.scan_faces(s.pairs[k].scan_triangle, c);
         if (constrained_index[v] < 0) {
-          constrained_index[v] = static_cast<int>(s.constrained.size());
-          s.constrained.push_back(v);
+          constrained_index[v] = static_cast<int>(constrained.size());
+          constrained.push_back(v);
           weight_sum.push_back(0.0);
         }
         entries.emplace_back(constrained_index[v], k, s.pairs[k].weight);
         weight_sum[constrained_index[v]] += s.pairs[k].weight;
       }
     for (auto& entry : entries) entry = Eigen::Triplet<double>(entry.row(), entry.col(), entry.value() / weight_sum[entry.row()]);
-    s.average.resize(static_cast<int>(s.constrained.size()), m);
+    s.average.resize(static_cast<int>(constrained.size()), m);
     s.average.setFromTriplets(entries.begin(), entries.end());
   }
-  s.setup.num_constrained_vertices = static_cast<int>(s.constrained.size());
-  std::vector<int> free_index(n, -1);
-  for (int v = 0; v < n; ++v)
-    if (constrained_index[v] < 0) {
-      free_index[v] = static_cast<int>(s.free_vertices.size());
-      s.free_vertices.push_back(v);
-    }
-  const int num_free = static_cast<int>(s.free_vertices.size());
-  const int num_constrained = static_cast<int>(s.constrained.size());
-  {
-    std::vector<Eigen::Triplet<double>> ff, fc;
-    for (int col = 0; col < laplacian.outerSize(); ++col)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(laplacian, col); it; ++it) {
-        const int row = static_cast<int>(it.row());
-        if (free_index[row] < 0) continue;
-        if (free_index[col] >= 0)
-          ff.emplace_back(free_index[row], free_index[col], it.value());
-        else
-          fc.emplace_back(free_index[row], constrained_index[col], -it.value());
-      }
-    Eigen::SparseMatrix<double> l_ff(num_free, num_free), minus_l_fc(num_free, num_constrained);
-    l_ff.setFromTriplets(ff.begin(), ff.end());
-    minus_l_fc.setFromTriplets(fc.begin(), fc.end());
-    s.harmonic_rhs = minus_l_fc * s.average;
-    if (num_free > 0 && s.harmonic.Factor(l_ff) != CholeskyStatus::kOk)
-      throw InputError(scan_source, "the harmonic interpolation system cannot be factored: " + s.harmonic.message());
-    s.harmonic.set_threads(options.threads);
-    s.setup.harmonic_factor_nonzeros = s.harmonic.factor_nonzeros();
-  }
+  s.setup.num_constrained_vertices = static_cast<int>(constrained.size());
+  if (!s.harmonic.Factor(laplacian, constrained, options.threads))
+    throw InputError(scan_source, "the harmonic interpolation system cannot be factored: " +
+                                      s.harmonic.factor.message());
+  s.setup.harmonic_factor_nonzeros = s.harmonic.factor.factor_nonzeros();
+  if (options.slerp_paths) s.laplacian = laplacian;
 
   // Segment weight fields: the harmonic field is linear in the per-segment quaternions.
   if (options.segment_fields) {
@@ -343,13 +485,7 @@ ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_referenc
       }
       indicator.setFromTriplets(entries.begin(), entries.end());
       s.segment_fields.resize(n, s.num_segments);
-      s.segment_fields.setZero();
-      const Eigen::MatrixXd at_constrained = Eigen::MatrixXd(s.average * indicator);
-      for (int i = 0; i < num_constrained; ++i) s.segment_fields.row(s.constrained[i]) = at_constrained.row(i);
-      if (num_free > 0) {
-        const Eigen::MatrixXd at_free = s.harmonic.Solve(Eigen::MatrixXd(s.harmonic_rhs * indicator));
-        for (int i = 0; i < num_free; ++i) s.segment_fields.row(s.free_vertices[i]) = at_free.row(i);
-      }
+      s.harmonic.Solve(Eigen::MatrixXd(s.average * indicator), &s.segment_fields);
       s.setup.num_segment_fields = s.num_segments;
     }
   }
@@ -453,7 +589,10 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
 
   // 2. Choose the reference: the reference pose, or an intermediate one (an earlier frame).
   int reference = -1;
-  if (summary.singular && s.options.intermediate_reference) {
+  if (summary.singular && s.options.slerp_paths) {
+    s.intermediate_frame = -1;
+    summary.slerp_path_vertices = s.UpdateSlerpPaths(full_q, &summary.warnings);
+  } else if (summary.singular && s.options.intermediate_reference) {
     bool keep = false;
     if (s.intermediate_frame >= 0) {
       double min_relative_w = 1.0;
@@ -491,7 +630,7 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
   const int threads = s.options.threads;
   RowMatrixX4d& vertex_q = s.vertex_q;
   vertex_q.resize(n, 4);
-  bool use_fields = s.num_segments > 0;
+  bool use_fields = s.num_segments > 0 && summary.slerp_path_vertices == 0;
   Eigen::Matrix<double, Eigen::Dynamic, 4> segment_q;
   if (use_fields) {
     segment_q.setZero(s.num_segments, 4);
@@ -509,11 +648,21 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
   } else {
     Eigen::MatrixXd constraint_q(m, 4);
     for (int k = 0; k < m; ++k) constraint_q.row(k) = q[k].transpose();
-    const Eigen::MatrixXd at_constrained = s.average * constraint_q;
-    for (std::size_t i = 0; i < s.constrained.size(); ++i) vertex_q.row(s.constrained[i]) = at_constrained.row(i);
-    if (!s.free_vertices.empty()) {
-      const Eigen::MatrixXd at_free = s.harmonic.Solve(Eigen::MatrixXd(s.harmonic_rhs * constraint_q));
-      for (std::size_t i = 0; i < s.free_vertices.size(); ++i) vertex_q.row(s.free_vertices[i]) = at_free.row(i);
+    if (summary.slerp_path_vertices == 0) {
+      s.harmonic.Solve(Eigen::MatrixXd(s.average * constraint_q), &vertex_q);
+    } else {
+      const int num_given = static_cast<int>(s.harmonic.constrained.size());
+      Eigen::MatrixXd values(num_given + s.path_vertices_at.size(), 4);
+      values.topRows(num_given) = s.average * constraint_q;
+      for (std::size_t i = 0; i < s.path_vertices_at.size(); ++i) {
+        Eigen::Vector4d sum = Eigen::Vector4d::Zero();
+        for (int p : s.path_vertices_at[i]) {
+          const PathVertex& path = s.path_vertices[p];
+          sum += Slerp(q[path.from_pair], q[path.to_pair], path.t);
+        }
+        values.row(num_given + i) = sum.transpose() / s.path_vertices_at[i].size();
+      }
+      s.path_harmonic.Solve(values, &vertex_q);
     }
   }
 

@@ -30,6 +30,12 @@ struct ConfluentMotionOptions {
   // Near a singularity, use the previous frame (template pose and the scan's per-triangle
   // rotations) as an intermediate reference, so only the rotation since then is interpolated.
   bool intermediate_reference = true;
+  // Report section 4.3, second solution: near a singularity, add constraints along the shortest
+  // path over the scan from each near-180-degree pair to the nearest pair that is not, with
+  // quaternions SLERPed along the path by arc length, so the twist spreads evenly instead of
+  // collapsing where the blended quaternions cancel. The harmonic system is refactored when
+  // the set of near-180-degree pairs changes. Takes precedence over intermediate_reference.
+  bool slerp_paths = false;
   // Keep each constraint quaternion in the hemisphere of its value in the previous frame, so w
   // changes continuously (past 180 degrees it goes negative). Off: per frame, the hemisphere of
   // the neighbours only (rotations flip direction when they cross 180 degrees).
@@ -66,6 +72,7 @@ struct DeformSummary {
   bool singular = false;                // some constraint's w (signs continuous over frames) < singular_w
   int reference_frame = -1;             // -1: the reference pose; else the intermediate reference frame
   bool used_segment_fields = false;
+  int slerp_path_vertices = 0;          // scan vertices constrained along SLERP paths (0: none)
   double placement_rms_m = 0.0;         // rms residual of the correspondence-centroid fit
   std::vector<std::string> warnings;
 };

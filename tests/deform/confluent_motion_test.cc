@@ -166,32 +166,39 @@ double RingTwist(const RowMatrixX3d& reference, const RowMatrixX3d& deformed, do
 // frames. The harmonic twist between the elbow markers (z = 0.1) and the wrist markers
 // (z = 0.5) should grow linearly along the arm. Without handling, the twist flips direction
 // when it crosses 180 degrees (hemisphere signs) or concentrates in the middle of the arm
-// (blend of nearly opposite quaternions); the intermediate reference keeps it linear.
-TEST(ConfluentMotion, CandyWrapperIsHandledByIntermediateReference) {
+// (blend of nearly opposite quaternions); the intermediate reference and the SLERP paths keep
+// it linear.
+TEST(ConfluentMotion, CandyWrapperIsHandledByIntermediateReferenceAndSlerpPaths) {
   const Mesh template_mesh = testing::MakeTube(0.04, 0.6, 24, 12);
   const Mesh scan = testing::MakeTube(0.04, 0.6, 60, 24, 0.13);
   const Correspondences pairs = testing::TubePairs(template_mesh, scan, {0.05, 0.1, 0.5, 0.55}, 4, 0.04, 0.3);
-  ConfluentMotionOptions hemisphere, temporal, handled;
+  ConfluentMotionOptions hemisphere, temporal, intermediate, slerp;
   hemisphere.intermediate_reference = false;
   hemisphere.temporal_signs = false;
   temporal.intermediate_reference = false;
+  slerp.slerp_paths = true;
+  const ConfluentMotionOptions modes[] = {hemisphere, temporal, intermediate, slerp};
   std::vector<ConfluentMotion> motions;
-  for (const auto& options : {hemisphere, temporal, handled}) motions.emplace_back(scan, template_mesh, pairs, options);
-  double worst[3] = {0, 0, 0};
-  bool detected = false;
+  for (const auto& options : modes) motions.emplace_back(scan, template_mesh, pairs, options);
+  double worst[4] = {0, 0, 0, 0};
+  int intermediate_frames = 0, slerp_frames = 0;
   for (int frame = 0; frame <= 27; ++frame) {
     const double twist = frame * 10.0 * M_PI / 180;
     const RowMatrixX3d posed = testing::RotateAbove(
         template_mesh.vertices, 0.3, Eigen::AngleAxisd(twist, Eigen::Vector3d::UnitZ()).toRotationMatrix());
-    for (int mode = 0; mode < 3; ++mode) {
+    for (int mode = 0; mode < 4; ++mode) {
       DeformSummary summary;
       const RowMatrixX3d x = motions[mode].Deform(posed, &summary);
       ASSERT_TRUE(x.allFinite());
-      if (mode == 2 && frame == 18) {  // 180 degrees: detected, intermediate reference in use
+      if (frame == 18) {  // 180 degrees: detected, handled
         EXPECT_TRUE(summary.singular);
         EXPECT_LT(summary.min_abs_w, 0.05);
-        EXPECT_GE(summary.reference_frame, 0);
-        detected = true;
+      }
+      if (mode == 2 && summary.reference_frame >= 0) ++intermediate_frames;
+      if (mode == 3) {
+        EXPECT_EQ(summary.reference_frame, -1);
+        EXPECT_EQ(summary.slerp_path_vertices > 0, summary.singular) << "frame " << frame;
+        slerp_frames += summary.slerp_path_vertices > 0;
       }
       for (double z : {0.2, 0.3, 0.4}) {
         const double expected = twist * (z - 0.1) / 0.4;
@@ -200,12 +207,15 @@ TEST(ConfluentMotion, CandyWrapperIsHandledByIntermediateReference) {
       }
     }
   }
-  ASSERT_TRUE(detected);
   std::printf("twist 0..270 deg, worst ring twist error: hemisphere signs %.1f deg, temporal signs %.1f deg, "
-              "intermediate reference %.1f deg\n", worst[0], worst[1], worst[2]);
+              "intermediate reference %.1f deg (%d frames), SLERP paths %.1f deg (%d frames)\n",
+              worst[0], worst[1], worst[2], intermediate_frames, worst[3], slerp_frames);
+  EXPECT_GT(intermediate_frames, 0);
+  EXPECT_GT(slerp_frames, 0);
   EXPECT_GT(worst[0], 90.0);
   EXPECT_GT(worst[1], 20.0);
   EXPECT_LT(worst[2], 10.0);
+  EXPECT_LT(worst[3], 10.0);
 }
 
 TEST(ConfluentMotion, OutOfRangeIndicesNameTheFile) {
