@@ -250,7 +250,11 @@ int RunAnimate(const ParsedArgs& args, const Context& context) {
       bvh ? BvhMotionOfTemplate(args, scan_path, scan, out_dir) : SequenceMotion(args, scan_path, scan, out_dir);
 
   ConfluentMotionOptions options;
-  options.intermediate_reference = !args.has("no-intermediate-reference");
+  const std::string singularities = args.get("singularities", "intermediate");
+  if (singularities != "intermediate" && singularities != "slerp" && singularities != "none")
+    throw UsageError("--singularities: expected intermediate, slerp or none, got '" + singularities + "'");
+  options.intermediate_reference = singularities == "intermediate" && !args.has("no-intermediate-reference");
+  options.slerp_paths = singularities == "slerp";
   ConfluentMotion motion(scan, source.reference, source.correspondences, options, scan_path,
                          args.get("correspondences", out_dir + "/correspondences.json"));
   for (const std::string& warning : motion.setup_summary().warnings)
@@ -389,7 +393,8 @@ CommandSpec MakeAnimateCommand() {
       {"render", "orbit", "render the animated scan along an orbit (DIR/orbit/<frame>.png, DIR/orbit.mp4)"},
       {"render-width", "PX", "orbit image width (default 640)"},
       {"render-height", "PX", "orbit image height (default 480)"},
-      {"no-intermediate-reference", "", "do not switch reference near 180-degree rotations"},
+      {"singularities", "MODE", "near-180-degree rotations (report 4.3): intermediate (default), slerp or none"},
+      {"no-intermediate-reference", "", "same as --singularities none"},
   };
   spec.run = RunAnimate;
   return spec;

@@ -69,6 +69,29 @@ TEST_F(AnimateCommand, WritesFramesWithColoursAndPointCache) {
   EXPECT_FALSE(std::filesystem::exists(dir_ / "out/000004.ply"));
 }
 
+// The singularity handlings agree away from 180 degrees (this bend stays well below it).
+TEST_F(AnimateCommand, SingularityModesAgreeAwayFromTheSingularity) {
+  for (const std::string mode : {"slerp", "none"}) {
+    const auto result = testing::RunConfluent({"animate", "--scan", dir_ / "scan.ply", "--correspondences",
+                                               dir_ / "c.json", "--template-sequence", dir_ / "tmpl", "--out",
+                                               dir_ / ("out_" + mode), "--singularities", mode});
+    ASSERT_EQ(result.exit_code, 0) << result.stderr_text;
+  }
+  const auto reference = testing::RunConfluent({"animate", "--scan", dir_ / "scan.ply", "--correspondences",
+                                                dir_ / "c.json", "--template-sequence", dir_ / "tmpl", "--out",
+                                                dir_ / "out"});
+  ASSERT_EQ(reference.exit_code, 0) << reference.stderr_text;
+  for (const std::string mode : {"slerp", "none"}) {
+    const Mesh a = ReadMesh(dir_ / "out/000003.ply"), b = ReadMesh(dir_ / ("out_" + mode + "/000003.ply"));
+    EXPECT_LT((a.vertices - b.vertices).cwiseAbs().maxCoeff(), 1e-6) << mode;
+  }
+  const auto usage = testing::RunConfluent({"animate", "--scan", dir_ / "scan.ply", "--correspondences",
+                                            dir_ / "c.json", "--template-sequence", dir_ / "tmpl", "--out",
+                                            dir_ / "out", "--singularities", "magic"});
+  EXPECT_EQ(usage.exit_code, 2);
+  EXPECT_NE(usage.stderr_text.find("--singularities"), std::string::npos) << usage.stderr_text;
+}
+
 TEST_F(AnimateCommand, BadCorrespondencesNameTheFile) {
   std::ofstream(dir_ / "bad.json") << "{\"pairs\": [{\"template_triangle\": 0, \"scan_triangle\": 123456}]}";
   const auto result = testing::RunConfluent({"animate", "--scan", dir_ / "scan.ply", "--correspondences",
