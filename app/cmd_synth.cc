@@ -41,6 +41,8 @@ int RunSynth(const ParsedArgs& args, const Context& context) {
   if (skinning == "linear") options.skinning = SkinningMethod::kLinear;
   else if (skinning != "dq") throw UsageError("--skinning: expected dq or linear, got '" + skinning + "'");
   options.actor_sequence_dir = args.get("actor-sequence");
+  options.actor_mesh_path = args.get("actor-mesh");
+  options.actor_skin_path = args.get("actor-skin");
   const std::string up = args.get("up", "z");
   if (up != "y" && up != "z") throw UsageError("--up: expected y or z, got '" + up + "'");
   options.sequence_up_axis = up[0];
@@ -51,7 +53,7 @@ int RunSynth(const ParsedArgs& args, const Context& context) {
   if (bvh_up != "auto" && bvh_up != "y" && bvh_up != "z") throw UsageError("--bvh-up: expected auto, y or z, got '" + bvh_up + "'");
   options.motion.bvh.up_axis = bvh_up == "auto" ? 'a' : bvh_up[0];
   if (!options.motion.bvh_path.empty() && !options.actor_sequence_dir.empty())
-    throw UsageError("--bvh drives the procedural actor; it cannot be combined with --actor-sequence");
+    throw UsageError("--bvh drives a skinned actor; it cannot be combined with --actor-sequence");
   if (!options.motion.bvh_path.empty() && !args.has("frames")) options.motion.num_frames = 1 << 20;
   const StudioSynthSummary summary = SynthesizeCapture(options, context.make_progress());
   std::printf("wrote %s: %d cameras x %d frames (actor: %d vertices, %d triangles) in %.1f s\n",
@@ -73,11 +75,12 @@ CommandSpec MakeSynthCommand() {
       "built-in motion (arms over the head, a turn, a kick, a crouch; 25 fps) in a studio with a tiled floor,\n"
       "textured walls and a soft shadow, seen by a ring of cameras plus held-out cameras. Writes the recorded\n"
       "camera folder (intri.yml, extri.yml, images/<cam>/<frame>.png, background/<cam>.png, scan.ply) and a\n"
-      "ground-truth folder (masks, per-frame meshes, joints.json, skeleton.json, scan.ply).\n"
+      "ground-truth folder (masks, per-frame meshes, joints.json, skeleton.json, skin.json, scan.ply).\n"
       "World frame: Z up, floor z = 0, metres; the actor faces +y at rest. --preset tiny makes a small test\n"
       "fixture (4+2 cameras, 160x120, 10 frames, ~16K triangles). --actor-sequence DIR renders a mesh\n"
-      "sequence (one .obj/.ply per frame, fixed topology) instead of the procedural actor. --bvh FILE makes\n"
-      "the procedural actor perform a motion-capture file (CMU, Mixamo, MakeHuman ... joint names are mapped\n"
+      "sequence (one .obj/.ply per frame, fixed topology) instead of the procedural actor; --actor-mesh M\n"
+      "--actor-skin S a rigged body (its skeleton, with the studio's joint names, and skinning weights in S,\n"
+      "the format of the ground truth's skin.json). --bvh FILE makes the skinned actor perform a motion-capture file (CMU, Mixamo, MakeHuman ... joint names are mapped\n"
       "automatically, bone directions retargeted, Y-up turned to Z-up), sampled at --fps; without --frames,\n"
       "the whole file.";
   spec.options = {{"out", "CAPTURE", "capture folder to write", false, true},
@@ -102,6 +105,8 @@ CommandSpec MakeSynthCommand() {
                   {"seed", "N", "random seed (default 1)"},
                   {"threads", "N", "encoding threads (default 2)"},
                   {"actor-sequence", "DIR", "render this mesh sequence instead of the procedural actor"},
+                  {"actor-mesh", "MESH", "a rigged actor instead of the procedural one: its rest-pose mesh (with --actor-skin)"},
+                  {"actor-skin", "JSON", "the rigged actor's skeleton and skinning weights (skin.json, as in the ground truth)"},
                   {"up", "AXIS", "up axis of the actor sequence: z (default) or y"},
                   {"bvh", "FILE", "perform this BVH motion (retargeted to the actor) instead of the built-in one"},
                   {"bvh-map", "T=B,...", "BVH joint names for actor joints, e.g. left_shoulder=LeftArm"},

@@ -760,11 +760,13 @@ StudioActor BuildStudioActor(const StudioActorOptions& options) {
         Albedo(mesh.vertices.row(v).transpose(), vertex_segment[v], J, s, options.seed).cast<float>().transpose();
   actor.weights = ComputeWeights(mesh, adjacency, J, vertex_segment, s);
   actor.mesh = std::move(mesh);
-  const int segment_joint[kNumBodySegments] = {kHead, kNeck, kSpine, kPelvis, kLShoulder, kLElbow, kLWrist,
-                                               kRShoulder, kRElbow, kRWrist, kLHip, kLKnee, kLAnkle,
-                                               kRHip, kRKnee, kRAnkle};
-  std::copy(segment_joint, segment_joint + kNumBodySegments, actor.segment_joint.begin());
+  actor.segment_joint = StudioSegmentJoints();
   return actor;
+}
+
+std::array<int, kNumBodySegments> StudioSegmentJoints() {
+  return {kHead, kNeck, kSpine, kPelvis, kLShoulder, kLElbow, kLWrist, kRShoulder,
+          kRElbow, kRWrist, kLHip, kLKnee, kLAnkle, kRHip, kRKnee, kRAnkle};
 }
 
 }  // namespace confluent

@@ -54,6 +54,9 @@ struct StudioActor {
 // ("left_shoulder", ...).
 std::vector<std::string> StudioJointNames();
 
+// For each BodySegment, the index (into StudioJointNames()) of the joint that moves it rigidly.
+std::array<int, kNumBodySegments> StudioSegmentJoints();
+
 // The studio skeleton scaled to `options.height_m`, at rest in the A-pose (joint 0 = pelvis).
 Skeleton MakeStudioSkeleton(const StudioActorOptions& options = {});
 

@@ -21,6 +21,7 @@
 #include "core/image_io.h"
 #include "core/mesh_io.h"
 #include "render/renderer.h"
+#include "render/studio_skin_io.h"
 
 namespace confluent {
 namespace {
@@ -198,10 +199,11 @@ class ActorSource {
   virtual int num_frames() const = 0;
 };
 
-class ProceduralActor : public ActorSource {
+// A skinned actor (the procedural one, or a rigged mesh) performing the studio's motion.
+class SkinnedActor : public ActorSource {
  public:
-  ProceduralActor(const StudioSynthOptions& options)
-      : actor_(BuildStudioActor(options.actor)), method_(options.skinning) {
+  SkinnedActor(StudioActor actor, const StudioSynthOptions& options)
+      : actor_(std::move(actor)), method_(options.skinning) {
     poses_ = StudioPerformance(actor_.skeleton, options.motion);
   }
   const Mesh& rest_mesh() const override { return actor_.mesh; }
@@ -270,7 +272,10 @@ std::string OptionsJson(const StudioSynthOptions& o, const StudioSynthSummary& s
       << ",\n  \"fps\": " << JsonNumber(o.motion.fps) << ",\n  \"cameras\": " << s.num_cameras
       << ",\n  \"ring_cameras\": " << o.rig.num_ring_cameras << ",\n  \"heldout_cameras\": " << o.rig.num_heldout_cameras
       << ",\n  \"width\": " << o.rig.width_px << ",\n  \"height\": " << o.rig.height_px
-      << ",\n  \"actor\": \"" << (o.actor_sequence_dir.empty() ? "procedural" : o.actor_sequence_dir) << "\""
+      << ",\n  \"actor\": \""
+      << (!o.actor_sequence_dir.empty() ? o.actor_sequence_dir
+                                        : o.actor_mesh_path.empty() ? std::string("procedural") : o.actor_mesh_path)
+      << "\""
       << ",\n  \"motion\": \"" << (o.motion.bvh_path.empty() ? "default" : o.motion.bvh_path) << "\""
       << ",\n  \"actor_vertices\": " << s.num_vertices << ",\n  \"actor_triangles\": " << s.num_triangles
       << ",\n  \"skinning\": \"" << (o.skinning == SkinningMethod::kLinear ? "linear" : "dual_quaternion") << "\""
@@ -285,7 +290,11 @@ std::string OptionsJson(const StudioSynthOptions& o, const StudioSynthSummary& s
 
 void StudioSynthOptions::Check() const {
   if (capture_dir.empty()) throw UsageError("--out: a capture folder is required");
-  if (actor_sequence_dir.empty()) actor.Check();
+  if (actor_sequence_dir.empty() && actor_mesh_path.empty()) actor.Check();
+  if (actor_mesh_path.empty() != actor_skin_path.empty())
+    throw UsageError("--actor-mesh and --actor-skin go together (a rigged actor needs both)");
+  if (!actor_mesh_path.empty() && !actor_sequence_dir.empty())
+    throw UsageError("--actor-mesh and --actor-sequence are alternatives; give one");
   motion.Check();
   rig.Check();
   scene.Check();
@@ -314,9 +323,12 @@ StudioSynthSummary SynthesizeCapture(const StudioSynthOptions& options, const Pr
 
   ReportProgress(progress, "actor", 0, 1);
   std::unique_ptr<ActorSource> source;
-  ProceduralActor* procedural = nullptr;
+  SkinnedActor* procedural = nullptr;
   if (options.actor_sequence_dir.empty()) {
-    auto actor = std::make_unique<ProceduralActor>(options);
+    auto actor = std::make_unique<SkinnedActor>(
+        options.actor_mesh_path.empty() ? BuildStudioActor(options.actor)
+                                        : ReadRiggedActor(options.actor_mesh_path, options.actor_skin_path),
+        options);
     procedural = actor.get();
     source = std::move(actor);
   } else {
@@ -334,7 +346,10 @@ StudioSynthSummary SynthesizeCapture(const StudioSynthOptions& options, const Pr
   WriteEasyMocap(rig, gt);
   WriteMesh(capture + "/scan.ply", rest);
   WriteMesh(gt + "/scan.ply", rest);
-  if (procedural) WriteTextFile(gt + "/skeleton.json", SkeletonJson(procedural->actor().skeleton, procedural->actor()));
+  if (procedural) {
+    WriteTextFile(gt + "/skeleton.json", SkeletonJson(procedural->actor().skeleton, procedural->actor()));
+    WriteTextFile(gt + "/skin.json", StudioSkinJson(procedural->actor()));
+  }
 
   MeshRenderer renderer;
   const std::vector<TexturedMesh> scene = MakeStudioScene(options.scene);

@@ -6,8 +6,10 @@
 //                  images/<cam>/000000.png ..., background/<cam>.png (clean plates), scan.ply.
 // Ground truth:    masks/<cam>/000000.png (0/255), meshes/000000.ply (posed actor, same
 //                  topology as scan.ply), scan.ply (rest mesh with colours and segment labels),
-//                  skeleton.json, joints.json (per-frame joint positions and rotations; the
-//                  procedural actor only), cameras (intri.yml, extri.yml), synth.json (options).
+//                  skeleton.json, skin.json (skeleton and skinning weights, render/studio_skin_io.h),
+//                  joints.json (per-frame joint positions and rotations; skinned actors only:
+//                  the procedural one or a rigged mesh), cameras (intri.yml, extri.yml),
+//                  synth.json (options).
 
 #include <string>
 
@@ -35,6 +37,10 @@ struct StudioSynthOptions {
   // the sequence is moved so that frame 0 stands centred on the origin with its lowest point on
   // the floor. Meshes without colours get procedural ones.
   std::string actor_sequence_dir;
+  // Instead of the procedural actor: a rigged mesh (rest pose, world Z up, metres, facing +y)
+  // and its skeleton and skinning weights (render/studio_skin_io.h), performing the motion.
+  std::string actor_mesh_path;
+  std::string actor_skin_path;
   char sequence_up_axis = 'z';
   double noise_sigma = 2.0;       // Gaussian sensor noise, 8-bit grey levels (0 = none)
   double gain_spread = 0.06;      // per-camera gain drawn from [1 - spread, 1 + spread]
