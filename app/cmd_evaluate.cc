@@ -40,15 +40,12 @@ struct ViewScore {
 // images (the convention of Neural Body / ZJU-MoCap evaluations): background pixels near the
 // actor count as exact, so it is higher than the PSNR inside the region.
 double BoxPsnr(const Image& rendered, const Image& real, const Image& region) {
-  int x0 = region.width, y0 = region.height, x1 = -1, y1 = -1;
-  for (int y = 0; y < region.height; ++y)
-    for (int x = 0; x < region.width; ++x)
-      if (region.at<std::uint8_t>(x, y)) x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x), y1 = std::max(y1, y);
-  if (x1 < 0) return NAN;
+  if (std::none_of(region.data.begin(), region.data.end(), [](std::uint8_t v) { return v != 0; })) return NAN;
+  const auto [x0, y0, width, height] = MaskBox(region, 0.0);
   Image a = rendered, b = real, box(region.width, region.height, 1);
   for (int y = 0; y < region.height; ++y)
     for (int x = 0; x < region.width; ++x) {
-      box.at<std::uint8_t>(x, y) = (x >= x0 && x <= x1 && y >= y0 && y <= y1) ? 255 : 0;
+      box.at<std::uint8_t>(x, y) = (x >= x0 && x < x0 + width && y >= y0 && y < y0 + height) ? 255 : 0;
       if (region.at<std::uint8_t>(x, y)) continue;
       for (int c = 0; c < 3; ++c) a.at<std::uint8_t>(x, y, c) = b.at<std::uint8_t>(x, y, c) = 0;
     }
@@ -223,7 +220,11 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
         row.scan = Score(*rendered_scan, real, truth);
       }
       const RenderResult& best = rendered_scan ? *rendered_scan : rendered_template;
-      const Image difference = AbsoluteDifference(best.color, real);
+      // The difference inside the evaluation region (the union of the masks, as for PSNR).
+      const Image region = UnionMask(truth, best.silhouette);
+      Image difference = AbsoluteDifference(best.color, real);
+      for (std::size_t i = 0; i < region.data.size(); ++i)
+        if (region.data[i] == 0) difference.ptr<float>()[i] = 0.0f;
       if (error_sum[h].empty()) error_sum[h] = Image(difference.width, difference.height, 1, PixelType::kFloat32);
       for (std::size_t i = 0; i < difference.data.size() / 4; ++i)
         error_sum[h].ptr<float>()[i] += difference.ptr<float>()[i];
@@ -239,6 +240,8 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
         if (rendered_scan) panels.push_back(rendered_scan->color), captions.push_back("scan");
         panels.push_back(rendered_template.color), captions.push_back("template");
         panels.push_back(difference_rgb), captions.push_back(std::string("|") + (rendered_scan ? "scan" : "template") + " - real| x4");
+        const std::array<int, 4> box = MaskBox(region, 0.15);
+        for (Image& panel : panels) panel = CropImage(panel, box);
         const std::string path = run.Path("evaluation/" + camera.name + "/" + FrameStem(frame) + ".png");
         fs::create_directories(fs::path(path).parent_path());
         WriteImage(path, SideBySide(panels, captions));
@@ -324,7 +327,7 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
     Image mean = error_sum[h];
     for (std::size_t i = 0; i < mean.data.size() / 4; ++i) mean.ptr<float>()[i] /= std::max(1, error_count[h]);
     WriteImage(run.Path("plots/error_heatmap_" + rig.cameras[heldout[h]].name + ".png"),
-               DrawHeatMap(mean, 0.25, "mean |rendered - real| over frames, " + rig.cameras[heldout[h]].name));
+               DrawHeatMap(mean, 0.25, "mean |rendered - real| inside the union of masks, " + rig.cameras[heldout[h]].name));
   }
   WriteTextFile(run.Path("report.html"), ReportHtml(run, summary, rig, heldout));
 
@@ -355,7 +358,7 @@ CommandSpec MakeEvaluateCommand() {
   spec.min_positionals = spec.max_positionals = 1;
   spec.options = {
       {"run", "RUN", "the run folder", false, true},
-      {"heldout", "NAME", "held-out camera to score; repeatable", true, true},
+      {"heldout", "NAME", "held-out camera to score", true, true},
       {"masks", "DIR", "true silhouettes DIR/<cam>/<frame>.png (default: the run's masks)"},
       {"gt-meshes", "DIR", "ground-truth meshes DIR/<frame>.ply with the scan's topology: vertex error"},
       {"frames", "A:B", "frame range, B exclusive (default: all)"},

@@ -288,7 +288,7 @@ CommandSpec MakeRenderCommand() {
       {"out", "DIR", "output folder (e.g. RUN/renders)", false, true},
       {"path", "PATH", "orbit (default), cameras:A,B,..., fixed:NAME, fixed:CALIB_DIR/NAME or bullet:FRAME"},
       {"geometry", "scan|template", "which meshes to texture (default scan)"},
-      {"exclude-camera", "NAME", "do not texture from this camera (repeatable)", true},
+      {"exclude-camera", "NAME", "do not texture from this camera", true},
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
       {"format", "png|exr", "image format (default png)"},
       {"mp4", "", "also write DIR/<view>.mp4 (needs ffmpeg)"},

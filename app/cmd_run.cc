@@ -197,7 +197,7 @@ CommandSpec MakeRunCommand() {
       {"no-scan", "", "ignore any scan: the 3D video uses the template"},
       {"allow-open-scan", "", "accept a scan with holes (boundary edges)"},
       {"correspondences", "FILE", "template<->scan correspondences (default: automatic)"},
-      {"exclude-camera", "NAME", "do not use this camera (held out for evaluation); repeatable", true},
+      {"exclude-camera", "NAME", "do not use this camera (held out for evaluation)", true},
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
       {"masks", "DIR", "use these masks DIR/<cam>/<frame>.png instead of extracting silhouettes"},
       {"no-render", "", "skip the 3D-video render stage"},

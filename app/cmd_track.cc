@@ -243,7 +243,7 @@ CommandSpec MakeTrackCommand() {
   spec.min_positionals = spec.max_positionals = 1;
   spec.options = {
       {"out", "RUN", "output folder", false, true},
-      {"exclude-camera", "NAME", "do not use this camera (held out); repeatable", true},
+      {"exclude-camera", "NAME", "do not use this camera (held out)", true},
       {"masks", "DIR", "masks folder DIR/<cam>/<frame>.png (default CAPTURE/masks)"},
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
       {"gt-joints", "FILE", "ground-truth joints.json of `confluent synth`: report the 3D joint error"},

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -103,6 +104,30 @@ Image DrawHeatMap(const Image& values, double max_value, const std::string& titl
   cv::Mat rgb;
   cv::cvtColor(canvas, rgb, cv::COLOR_BGR2RGB);  // the colour map is BGR; the text is grey either way
   return ImageFromCvMat(rgb);
+}
+
+std::array<int, 4> MaskBox(const Image& mask, double margin) {
+  int x0 = mask.width, y0 = mask.height, x1 = -1, y1 = -1;
+  for (int y = 0; y < mask.height; ++y)
+    for (int x = 0; x < mask.width; ++x)
+      if (mask.at<std::uint8_t>(x, y)) x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x), y1 = std::max(y1, y);
+  if (x1 < 0) return {0, 0, mask.width, mask.height};
+  const int grow_x = static_cast<int>(margin * (x1 - x0 + 1)), grow_y = static_cast<int>(margin * (y1 - y0 + 1));
+  x0 = std::max(0, x0 - grow_x), y0 = std::max(0, y0 - grow_y);
+  x1 = std::min(mask.width - 1, x1 + grow_x), y1 = std::min(mask.height - 1, y1 + grow_y);
+  return {x0, y0, x1 - x0 + 1, y1 - y0 + 1};
+}
+
+Image CropImage(const Image& image, const std::array<int, 4>& box) {
+  const auto [x, y, width, height] = box;
+  if (x < 0 || y < 0 || width <= 0 || height <= 0 || x + width > image.width || y + height > image.height)
+    throw std::invalid_argument("CropImage: the box is outside the image");
+  Image out(width, height, image.channels, image.type);
+  const std::size_t pixel = image.row_bytes() / image.width;
+  for (int row = 0; row < height; ++row)
+    std::memcpy(out.data.data() + row * out.row_bytes(), image.data.data() + (y + row) * image.row_bytes() + x * pixel,
+                out.row_bytes());
+  return out;
 }
 
 Image SideBySide(const std::vector<Image>& images, const std::vector<std::string>& captions) {

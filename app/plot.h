@@ -1,6 +1,7 @@
 #pragma once
 // Small charts and heat maps drawn into images, for reports (metrics per frame, error maps).
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,13 @@ Image DrawLineChart(const std::vector<PlotSeries>& series, const std::string& ti
 // A 1-channel float image in [0, max_value] as a colour-mapped RGB8 heat map (turbo colour
 // map) with a colour bar labelled from 0 to max_value.
 Image DrawHeatMap(const Image& values, double max_value, const std::string& title);
+
+// The bounding box {x, y, width, height} of the non-zero pixels of a 1-channel mask, grown by
+// `margin` times its size on each side and clipped to the image; the whole image when empty.
+std::array<int, 4> MaskBox(const Image& mask, double margin);
+
+// The part {x, y, width, height} of an image (the box must lie inside it).
+Image CropImage(const Image& image, const std::array<int, 4>& box);
 
 // Images placed side by side (same height; RGB8), each with a caption strip above it.
 Image SideBySide(const std::vector<Image>& images, const std::vector<std::string>& captions);
