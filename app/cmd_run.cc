@@ -140,6 +140,7 @@ int RunRun(const ParsedArgs& args, const Context& context) {
   inputs.correspondences_path = args.get("correspondences", capture.correspondences_path());
   if (!inputs.correspondences_path.empty() && !fs::exists(inputs.correspondences_path))
     throw InputError(inputs.correspondences_path, "correspondences file not found");
+  inputs.refine_silhouettes = !args.has("no-refine");
   inputs.threads = args.get_int("threads", 2);
   if (inputs.threads < 1 || inputs.threads > 64) throw UsageError("--threads: must be within [1, 64]");
   RenderStageOptions render;
@@ -184,7 +185,8 @@ CommandSpec MakeRunCommand() {
   spec.description =
       "Stages, in order: silhouettes (RUN/masks), marker-less tracking (RUN/tracking, RUN/template, poses.json,\n"
       "motion.bvh), registration of the template to the scan and correspondences (RUN/correspondences.json,\n"
-      "automatic unless given), Confluent Motion (RUN/scan/<frame>.ply) and the 3D video: an orbit around the\n"
+      "automatic unless given), Confluent Motion refined against the used cameras' silhouettes\n"
+      "(RUN/scan/<frame>.ply; --no-refine keeps the plain deformation) and the 3D video: an orbit around the\n"
       "actor, projectively textured from the used cameras (RUN/renders/orbit/<frame>.png, orbit.mp4).\n"
       "Without a scan (none given and none in the capture), the 3D video uses the tracked template.\n"
       "Resumable: every file is written atomically and a re-run skips finished frames. --frames A:B makes\n"
@@ -200,6 +202,7 @@ CommandSpec MakeRunCommand() {
       {"exclude-camera", "NAME", "do not use this camera (held out for evaluation)", true},
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
       {"masks", "DIR", "use these masks DIR/<cam>/<frame>.png instead of extracting silhouettes"},
+      {"no-refine", "", "keep the deformed scan as Confluent Motion gives it (no silhouette refinement)"},
       {"no-render", "", "skip the 3D-video render stage"},
       {"render-width", "PX", "width of the orbit video (default 960)"},
       {"render-height", "PX", "height of the orbit video (default 720)"},

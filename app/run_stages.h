@@ -26,6 +26,7 @@ struct RunInputs {
   const Mesh* scan = nullptr;        // the scan read from scan_path once (null without a scan)
   std::string correspondences_path;  // empty: automatic registration and correspondences
   int threads = 2;
+  bool refine_silhouettes = true;    // pull the animated scan onto the used cameras' masks
 };
 
 // How much a stage did.

@@ -1,0 +1,87 @@
+// Silhouette refinement (tracking/silhouette_refinement.h): a sphere that is too small and off
+// centre is pulled onto the silhouettes of the true sphere, seen by a ring of cameras.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/mesh_ops.h"
+#include "tracking/overlap.h"
+#include "tracking/silhouette_refinement.h"
+
+namespace confluent {
+namespace {
+
+// A camera on a ring of radius 3 m at height `height_m`, looking at the origin (Z up).
+Camera RingCamera(double azimuth_rad, double height_m) {
+  Camera camera;
+  camera.name = "ring";
+  camera.width = 320;
+  camera.height = 240;
+  camera.K << 320, 0, 159.5, 0, 320, 119.5, 0, 0, 1;
+  const Eigen::Vector3d centre(3.0 * std::cos(azimuth_rad), 3.0 * std::sin(azimuth_rad), height_m);
+  const Eigen::Vector3d z = (-centre).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  camera.rotation << x.transpose(), y.transpose(), z.transpose();
+  camera.translation = -camera.rotation * centre;
+  return camera;
+}
+
+double Iou(const Image& a, const Image& b) {
+  long both = 0, either = 0;
+  for (std::size_t i = 0; i < a.data.size(); ++i) {
+    both += a.data[i] && b.data[i];
+    either += a.data[i] || b.data[i];
+  }
+  return static_cast<double>(both) / either;
+}
+
+// Mean distance of the vertices from the true sphere (radius 0.3 m at the origin).
+double SphereError(const RowMatrixX3d& vertices) {
+  return (vertices.rowwise().norm().array() - 0.3).abs().mean();
+}
+
+TEST(SilhouetteRefinement, PullsAnOffsetShrunkSphereOntoTheSilhouettes) {
+  const Mesh truth = MakeUvSphere(0.3, 48, 96);
+  std::vector<Camera> cameras;
+  std::vector<Image> masks;
+  for (int k = 0; k < 6; ++k) {
+    cameras.push_back(RingCamera(2.0 * M_PI * k / 6, k % 2 ? 0.8 : -0.4));
+    masks.push_back(RasterizeSilhouette(truth, cameras.back()));
+  }
+  Mesh start = truth;
+  start.vertices = (0.93 * truth.vertices).rowwise() + Eigen::RowVector3d(0.03, -0.02, 0.01);
+  SilhouetteRefiner refiner(start);
+  SilhouetteRefinementSummary summary;
+  const RowMatrixX3d refined = refiner.Refine(start.vertices, cameras, masks, &summary);
+  ASSERT_TRUE(refined.allFinite());
+  ASSERT_EQ(summary.iou_before.size(), cameras.size());
+  for (std::size_t c = 0; c < cameras.size(); ++c) {
+    EXPECT_GT(summary.iou_after[c], 0.98) << c;
+    EXPECT_GT(summary.iou_after[c], summary.iou_before[c] + 0.05) << c;
+  }
+  EXPECT_GT(summary.rim_vertices, 100);
+  EXPECT_LT(SphereError(refined), 0.2 * SphereError(start.vertices));
+  // A camera the refinement never saw agrees better too.
+  const Camera unseen = RingCamera(0.5, 1.6);
+  const Image unseen_mask = RasterizeSilhouette(truth, unseen);
+  Mesh refined_mesh = start;
+  refined_mesh.vertices = refined;
+  EXPECT_GT(Iou(RasterizeSilhouette(refined_mesh, unseen), unseen_mask),
+            Iou(RasterizeSilhouette(start, unseen), unseen_mask) + 0.05);
+}
+
+TEST(SilhouetteRefinement, EmptyMasksAreSkippedAndWrongSizesRefused) {
+  const Mesh sphere = MakeUvSphere(0.3, 16, 32);
+  SilhouetteRefiner refiner(sphere);
+  const std::vector<Camera> cameras = {RingCamera(0.0, 0.0)};
+  SilhouetteRefinementSummary summary;
+  const RowMatrixX3d same = refiner.Refine(sphere.vertices, cameras, {Image(320, 240, 1)}, &summary);
+  EXPECT_EQ(same, sphere.vertices);
+  EXPECT_TRUE(std::isnan(summary.iou_before[0]));
+  EXPECT_THROW(refiner.Refine(sphere.vertices, cameras, {Image(100, 100, 1)}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace confluent

@@ -1,0 +1,188 @@
+#include "tracking/silhouette_refinement.h"
+
+#include <Eigen/SparseCore>
+#include <cmath>
+#include <cstdlib>
+#include <stdexcept>
+#include <thread>
+
+#include "core/error.h"
+#include "deform/cholmod_solver.h"
+#include "deform/laplacian.h"
+#include "tracking/overlap.h"
+
+namespace confluent {
+
+void SilhouetteRefinementOptions::Check() const {
+  if (iterations < 0 || !(search_px > 0.0) || !(max_rim_cosine > 0.0 && max_rim_cosine < 1.0) ||
+      !(spread_stiffness > 0.0) || !(fade_weight > 0.0) || threads < 1)
+    std::abort();
+}
+
+namespace {
+
+bool Inside(const Image& mask, const Eigen::Vector2d& pixel) {
+  const long x = std::lround(pixel.x()), y = std::lround(pixel.y());
+  if (x < 0 || y < 0 || x >= mask.width || y >= mask.height) return false;
+  return mask.data[static_cast<std::size_t>(y) * mask.width + x] > 127;
+}
+
+double Iou(const Image& a, const Image& b) {
+  long both = 0, either = 0;
+  for (std::size_t i = 0; i < a.data.size(); ++i) {
+    const bool x = a.data[i] > 127, y = b.data[i] > 127;
+    both += x && y;
+    either += x || y;
+  }
+  return either ? static_cast<double>(both) / either : 1.0;
+}
+
+// Area-weighted vertex normals (unit; zero for isolated vertices).
+RowMatrixX3d VertexNormals(const RowMatrixX3d& vertices, const RowMatrixX3i& faces) {
+  RowMatrixX3d normals = RowMatrixX3d::Zero(vertices.rows(), 3);
+  for (int f = 0; f < faces.rows(); ++f) {
+    const Eigen::RowVector3d a = vertices.row(faces(f, 0)), b = vertices.row(faces(f, 1)), c = vertices.row(faces(f, 2));
+    const Eigen::RowVector3d face_normal = (b - a).cross(c - a);
+    for (int k = 0; k < 3; ++k) normals.row(faces(f, k)) += face_normal;
+  }
+  for (int v = 0; v < normals.rows(); ++v) {
+    const double norm = normals.row(v).norm();
+    if (norm > 0.0) normals.row(v) /= norm;
+  }
+  return normals;
+}
+
+}  // namespace
+
+struct SilhouetteRefiner::Impl {
+  SilhouetteRefinementOptions options;
+  RowMatrixX3i faces;
+  double gamma = 0.0;     // absolute diffusion stiffness
+  SparseCholesky spread;  // L + gamma I
+
+  // Sums, per vertex, the 3D steps that bring it onto `mask`'s edge where it lies on the outline
+  // of `mesh` in `camera` (`own` is that outline's silhouette).
+  void RimSteps(const Mesh& mesh, const RowMatrixX3d& normals, const Camera& camera, const Image& own,
+                const Image& mask, RowMatrixX3d* step_sum, std::vector<int>* count) const {
+    const Eigen::Vector3d centre = camera.center_in_world();
+    const double half = 0.5, reach = options.search_px;
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      const Eigen::Vector3d point = mesh.vertices.row(v).transpose(), normal = normals.row(v).transpose();
+      if (std::abs(normal.dot((point - centre).normalized())) > options.max_rim_cosine) continue;
+      Eigen::Vector2d pixel;
+      if (!camera.ProjectChecked(point, &pixel)) continue;
+      bool in = false, out = false;  // on the outline: both sides within one pixel
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) (Inside(own, pixel + Eigen::Vector2d(dx, dy)) ? in : out) = true;
+      if (!in || !out) continue;
+      Eigen::Vector2d outward = camera.Project(point + 0.01 * normal) - pixel;
+      if (!(outward.norm() > 1e-9)) continue;
+      outward.normalize();
+      if (Inside(own, pixel + 2.0 * outward) && !Inside(own, pixel - 2.0 * outward)) outward = -outward;
+      // The edges (inside, then outside, going outwards) of the mask and of the scan's own
+      // silhouette nearest to the vertex, found alike so that their sampling biases cancel.
+      auto nearest_edge = [&](const Image& image) {
+        double best = reach + 1.0;
+        for (double t = -reach; t <= reach; t += half)
+          if (std::abs(t + 0.5 * half) < std::abs(best) && Inside(image, pixel + t * outward) &&
+              !Inside(image, pixel + (t + half) * outward))
+            best = t + 0.5 * half;
+        return best;
+      };
+      const double own_edge = nearest_edge(own), mask_edge = nearest_edge(mask);
+      if (std::abs(own_edge) > 1.5 || std::abs(mask_edge) > reach) continue;
+      const double best = mask_edge - own_edge;
+      // The same pixel shift at the vertex's depth, perpendicular to its ray.
+      const Eigen::Vector3d in_camera = camera.rotation * point + camera.translation;
+      const Eigen::Vector3d step_in_camera(best * outward.x() * in_camera.z() / camera.K(0, 0),
+                                           best * outward.y() * in_camera.z() / camera.K(1, 1), 0.0);
+      step_sum->row(v) += (camera.rotation.transpose() * step_in_camera).transpose();
+      ++(*count)[v];
+    }
+  }
+};
+
+SilhouetteRefiner::SilhouetteRefiner(const Mesh& scan, const SilhouetteRefinementOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  options.Check();
+  impl_->options = options;
+  impl_->faces = scan.faces;
+  if (scan.num_faces() == 0) throw InputError("scan", "silhouette refinement: the scan has no faces");
+  const Eigen::SparseMatrix<double> laplacian = CotanLaplacian(scan.vertices, scan.faces);
+  impl_->gamma = options.spread_stiffness * laplacian.diagonal().mean();
+  Eigen::SparseMatrix<double> identity(laplacian.rows(), laplacian.cols());
+  identity.setIdentity();
+  if (impl_->spread.Factor(laplacian + impl_->gamma * identity) != CholeskyStatus::kOk)
+    throw InputError("scan", "silhouette refinement: the diffusion system cannot be factored: " +
+                                 impl_->spread.message());
+  impl_->spread.set_threads(options.threads);
+}
+
+SilhouetteRefiner::~SilhouetteRefiner() = default;
+SilhouetteRefiner::SilhouetteRefiner(SilhouetteRefiner&&) noexcept = default;
+SilhouetteRefiner& SilhouetteRefiner::operator=(SilhouetteRefiner&&) noexcept = default;
+
+RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::vector<Camera>& cameras,
+                                       const std::vector<Image>& masks, SilhouetteRefinementSummary* summary_out) const {
+  const Impl& s = *impl_;
+  const int n = static_cast<int>(vertices.rows());
+  if (n != s.spread.rows()) throw std::invalid_argument("Refine: the vertex count differs from the scan's");
+  if (cameras.size() != masks.size()) throw std::invalid_argument("Refine: one mask per camera is needed");
+  std::vector<int> usable;
+  for (std::size_t c = 0; c < cameras.size(); ++c) {
+    if (masks[c].width != cameras[c].width || masks[c].height != cameras[c].height || masks[c].channels != 1)
+      throw std::invalid_argument("Refine: mask " + std::to_string(c) + " does not match camera " + cameras[c].name);
+    if (CountForeground(masks[c]) > 0) usable.push_back(static_cast<int>(c));
+  }
+  SilhouetteRefinementSummary summary;
+  summary.iou_before.assign(cameras.size(), NAN);
+  summary.iou_after.assign(cameras.size(), NAN);
+  Mesh mesh;
+  mesh.vertices = vertices;
+  mesh.faces = s.faces;
+  if (!vertices.allFinite()) throw std::invalid_argument("Refine: non-finite vertices");
+  const RowMatrixX3d start = vertices;
+  const int threads = std::max(1, std::min<int>(s.options.threads, static_cast<int>(usable.size())));
+  for (int round = 0; round < s.options.iterations && !usable.empty(); ++round) {
+    const RowMatrixX3d normals = VertexNormals(mesh.vertices, mesh.faces);
+    std::vector<RowMatrixX3d> step_sums(threads, RowMatrixX3d::Zero(n, 3));
+    std::vector<std::vector<int>> counts(threads, std::vector<int>(n, 0));
+    auto work = [&](int part) {
+      for (std::size_t i = part; i < usable.size(); i += threads) {
+        const int c = usable[i];
+        const Image own = RasterizeSilhouette(mesh, cameras[c]);
+        if (round == 0) summary.iou_before[c] = Iou(own, masks[c]);
+        s.RimSteps(mesh, normals, cameras[c], own, masks[c], &step_sums[part], &counts[part]);
+      }
+    };
+    std::vector<std::thread> helpers;
+    for (int part = 1; part < threads; ++part) helpers.emplace_back(work, part);
+    work(0);
+    for (std::thread& helper : helpers) helper.join();
+    // Normalised diffusion: D = S(w step) / (S(w) + fade), S = gamma (L + gamma I)^-1.
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 4);
+    summary.rim_vertices = 0;
+    for (int v = 0; v < n; ++v) {
+      int count = 0;
+      Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+      for (int part = 0; part < threads; ++part) count += counts[part][v], sum += step_sums[part].row(v);
+      if (count == 0) continue;
+      rhs.block<1, 3>(v, 0) = s.gamma * sum / count;
+      rhs(v, 3) = s.gamma;
+      ++summary.rim_vertices;
+    }
+    const Eigen::MatrixXd spread = s.spread.Solve(rhs);
+    for (int v = 0; v < n; ++v) {
+      const Eigen::RowVector3d step = spread.block<1, 3>(v, 0) / (spread(v, 3) + s.options.fade_weight);
+      if (step.allFinite()) mesh.vertices.row(v) += step;
+    }
+  }
+  for (int c : usable) summary.iou_after[c] = Iou(RasterizeSilhouette(mesh, cameras[c]), masks[c]);
+  const Eigen::VectorXd shift = (mesh.vertices - start).rowwise().norm();
+  summary.mean_shift_m = n ? shift.mean() : 0.0;
+  summary.max_shift_m = n ? shift.maxCoeff() : 0.0;
+  if (summary_out) *summary_out = std::move(summary);
+  return mesh.vertices;
+}
+
+}  // namespace confluent
