@@ -16,6 +16,7 @@
 #include "core/cv_interop.h"
 #include "core/image_io.h"
 #include "core/video.h"
+#include "silhouette/classify_kernel.h"
 #include "silhouette/silhouette.h"
 
 namespace confluent {
@@ -115,6 +116,41 @@ void BM_CleanMaskOneCamera(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(CleanMask(raw, MaskCleanupOptions{}));
 }
 BENCHMARK(BM_CleanMaskOneCamera)->Unit(benchmark::kMillisecond);
+
+void BM_SummarizeMaskOneCamera(benchmark::State& state) {
+  Rig8& rig = SharedRig();
+  const Image mask = CleanMask(rig.extractors[0].model().Classify(rig.frames[0]), MaskCleanupOptions{});
+  for (auto _ : state) benchmark::DoNotOptimize(SummarizeMask(mask, 0.05, SilhouetteOptions{}));
+}
+BENCHMARK(BM_SummarizeMaskOneCamera)->Unit(benchmark::kMillisecond);
+
+// The classification loop alone, per instruction set (0 baseline x86-64, 1 AVX2, 2 AVX-512),
+// with a planar model of the plate's colours.
+void BM_ClassifyKernel(benchmark::State& state) {
+  const auto isa = static_cast<ClassifyIsa>(state.range(0));
+  if (!ClassifyIsaSupported(isa)) {
+    state.SkipWithError("instruction set not supported by this CPU");
+    return;
+  }
+  Rig8& rig = SharedRig();
+  const std::size_t pixels = static_cast<std::size_t>(kWidth) * kHeight;
+  const Image plate = MakePlate(10);
+  std::vector<std::uint8_t> planes(6 * pixels);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    for (int c = 0; c < 3; ++c) planes[c * pixels + i] = std::max<std::uint8_t>(1, plate.data[3 * i + c]);
+    planes[3 * pixels + i] = 24;   // 3 grey levels
+    planes[4 * pixels + i] = 102;  // shadows down to 0.4
+    planes[5 * pixels + i] = 10;   // highlights up to 1.3
+  }
+  ClassifyPlanes model{planes.data(), planes.data() + pixels, planes.data() + 2 * pixels,
+                       planes.data() + 3 * pixels, planes.data() + 4 * pixels, planes.data() + 5 * pixels};
+  std::vector<std::uint8_t> mask(pixels);
+  for (auto _ : state) {
+    ClassifyPixels(rig.frames[0].data.data(), model, pixels, ClassifyParams{}, mask.data(), isa);
+    benchmark::DoNotOptimize(mask.data());
+  }
+}
+BENCHMARK(BM_ClassifyKernel)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 void BM_ChromaKeyOneCamera(benchmark::State& state) {
   Rig8& rig = SharedRig();

@@ -190,25 +190,27 @@ BackgroundModel BackgroundModel::FromFrames(const std::vector<Image>& frames, co
 
 void BackgroundModel::Pack() {
   const std::size_t pixels = static_cast<std::size_t>(width_) * height_;
-  packed_.assign(pixels * 8, 0);
+  packed_.assign(pixels * 6, 0);
+  std::uint8_t* planes[6];
+  for (int k = 0; k < 6; ++k) planes[k] = packed_.data() + k * pixels;
   const double tau_b = options_.brightness_threshold;
   for (std::size_t i = 0; i < pixels; ++i) {
-    std::uint8_t* out = &packed_[i * 8];
     double norm_sq = 0;
     for (int c = 0; c < 3; ++c) {
       // A black mean would make brightness distortion undefined: keep at least one level.
       const int level = std::clamp(static_cast<int>(std::lround(mean_[i * 3 + c])), 1, 255);
-      out[c] = static_cast<std::uint8_t>(level);
+      planes[c][i] = static_cast<std::uint8_t>(level);
       norm_sq += static_cast<double>(level) * level;
     }
     const double sigma = spread_[i] * threshold_scale_;
-    out[3] = static_cast<std::uint8_t>(std::clamp(static_cast<int>(std::lround(sigma / kSpreadStep)), 1, 255));
-    const double sigma_q = out[3] * kSpreadStep;
+    const int spread_code = std::clamp(static_cast<int>(std::lround(sigma / kSpreadStep)), 1, 255);
+    planes[3][i] = static_cast<std::uint8_t>(spread_code);
+    const double sigma_q = spread_code * kSpreadStep;
     const double relative = tau_b * sigma_q / std::sqrt(norm_sq);  // brightness noise as a fraction
     const double low = std::clamp(std::min(options_.shadow_min_brightness, 1.0 - relative), 0.0, 1.0);
     const double high = std::max(options_.highlight_max_brightness, 1.0 + relative);
-    out[4] = static_cast<std::uint8_t>(std::clamp(static_cast<int>(std::floor(low * 255.0)), 0, 255));
-    out[5] = static_cast<std::uint8_t>(std::clamp(static_cast<int>(std::ceil((high - 1.0) / kHighStep)), 0, 255));
+    planes[4][i] = static_cast<std::uint8_t>(std::clamp(static_cast<int>(std::floor(low * 255.0)), 0, 255));
+    planes[5][i] = static_cast<std::uint8_t>(std::clamp(static_cast<int>(std::ceil((high - 1.0) / kHighStep)), 0, 255));
   }
 }
 
@@ -224,23 +226,24 @@ Image BackgroundModel::Classify(const Image& frame, Image* labels) const {
   params.chroma_relative_sq = static_cast<float>(options_.chroma_relative * options_.chroma_relative);
   params.spread_step = kSpreadStep;
   params.high_step = kHighStep;
-  ClassifyPixels(frame.data.data(), packed_.data(), static_cast<std::size_t>(width_) * height_, params,
-                 mask.data.data());
+  const std::size_t pixels = static_cast<std::size_t>(width_) * height_;
+  const ClassifyPlanes planes = PlanesOf(packed_.data(), pixels);
+  ClassifyPixels(frame.data.data(), planes, pixels, params, mask.data.data());
   if (labels != nullptr) {
     *labels = Image(width_, height_, 1);
-    const std::size_t pixels = static_cast<std::size_t>(width_) * height_;
     for (std::size_t i = 0; i < pixels; ++i) {
       if (mask.data[i]) {
         labels->data[i] = static_cast<std::uint8_t>(PixelClass::kForeground);
         continue;
       }
-      const std::uint8_t* m = &packed_[i * 8];
+      const float m[3] = {static_cast<float>(planes.mean_r[i]), static_cast<float>(planes.mean_g[i]),
+                          static_cast<float>(planes.mean_b[i])};
       const std::uint8_t* v = &frame.data[i * 3];
-      const float norm_sq = float(m[0]) * m[0] + float(m[1]) * m[1] + float(m[2]) * m[2];
-      const float dot = float(v[0]) * m[0] + float(v[1]) * m[1] + float(v[2]) * m[2];
+      const float norm_sq = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
+      const float dot = v[0] * m[0] + v[1] * m[1] + v[2] * m[2];
       // Brightness change in grey levels along the mean colour, against the noise.
       const float change = (dot - norm_sq) / std::sqrt(norm_sq);
-      const float sigma = m[3] * kSpreadStep;
+      const float sigma = planes.spread[i] * kSpreadStep;
       PixelClass label = PixelClass::kBackground;
       if (change < -options_.brightness_threshold * sigma) label = PixelClass::kShadow;
       if (change > options_.brightness_threshold * sigma) label = PixelClass::kHighlight;

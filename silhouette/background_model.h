@@ -100,7 +100,8 @@ class BackgroundModel {
   double threshold_scale_ = 1.0;
   std::vector<float> mean_;    // 3 per pixel
   std::vector<float> spread_;  // 1 per pixel, grey levels
-  // Packed per pixel: mean R G B (8-bit), spread code, low and high brightness bounds (8-bit).
+  // Six planes of one byte per pixel: mean R, G, B (8-bit), spread code, low and high
+  // brightness bounds (see ClassifyPlanes in classify_kernel.h).
   std::vector<std::uint8_t> packed_;
 };
 

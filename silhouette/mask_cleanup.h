@@ -1,7 +1,9 @@
 #pragma once
 // Morphological clean-up of a raw foreground mask: speckle removal, closing, keeping the
 // actor's connected components, and filling small holes. Component analysis runs at a reduced
-// resolution; the mask's edge stays the full-resolution classification.
+// resolution, on runs of pixels and inside the foreground's bounding box (the result is that of
+// whole-frame morphology and labelling); the mask's edge stays the full-resolution
+// classification.
 
 #include "core/image.h"
 
@@ -10,8 +12,9 @@ namespace confluent {
 // Settings of CleanMask.
 struct MaskCleanupOptions {
   // Components, opening, closing and holes are computed at 1/work_scale of the resolution
-  // (1, 2 or 4; 0 = automatic: 1 up to 640 pixels wide, 2 up to 2048, else 4); the boundary
-  // band is taken from the full-resolution mask.
+  // (1, 2 or 4; 0 = automatic: 1 up to 640 pixels wide, 2 up to 2048, else 4); a work pixel is
+  // foreground when at least half of its block (cut at the right and bottom edges) is. The
+  // boundary band is taken from the full-resolution mask.
   int work_scale = 0;
   // Opening radius, in work pixels: removes speckle touching the actor and thin bridges, but
   // also limbs thinner than twice the radius; 0 = none (isolated speckle is dropped anyway).
