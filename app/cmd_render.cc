@@ -50,18 +50,10 @@ Image ToLinearFloat(const Image& rgb8) {
   return out;
 }
 
-// Resizes a camera's image to width x height (K rescaled; pixel centres at integers).
-Camera Resized(Camera camera, int width, int height) {
+// The camera at width x height (itself when width <= 0 or the size is unchanged).
+Camera Resized(const Camera& camera, int width, int height) {
   if (width <= 0 || (width == camera.width && height == camera.height)) return camera;
-  const double sx = static_cast<double>(width) / camera.width, sy = static_cast<double>(height) / camera.height;
-  camera.K(0, 0) *= sx;
-  camera.K(0, 1) *= sx;
-  camera.K(0, 2) = (camera.K(0, 2) + 0.5) * sx - 0.5;
-  camera.K(1, 1) *= sy;
-  camera.K(1, 2) = (camera.K(1, 2) + 0.5) * sy - 0.5;
-  camera.width = width;
-  camera.height = height;
-  return camera;
+  return ResizedCamera(camera, width, height);
 }
 
 int RunRender(const ParsedArgs& args, const Context& context) {

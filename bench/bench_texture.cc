@@ -3,6 +3,10 @@
 //   BM_TextureSetFrame   per video frame: 8 depth maps, feather maps, uploads
 //   BM_TextureRender     per novel view: rasterise + blend + readback
 //   BM_TextureFrame      both (one novel view per video frame, e.g. `confluent render`)
+//   BM_TextureFrame4Views  SetFrame + 4 novel views (e.g. a viewer or several output paths);
+//                          the time per view is a quarter of it
+//   BM_TextureSetFrameHalfVisibility  SetFrame with visibility_scale = 0.5 (depth and feather
+//                          maps at half resolution; not the default, it loses ~0.3 dB)
 // Read the *_median rows.
 
 #include <benchmark/benchmark.h>
@@ -53,6 +57,17 @@ struct Fixture {
     texturer->SetFrame(mesh.vertices, cameras, images);
     texturer->Render(view);  // warm-up (shader compile, framebuffer)
   }
+  // The texturer with depth and feather maps at half resolution (made on first use).
+  ProjectiveTexturer& HalfVisibility() {
+    if (!half_visibility) {
+      ProjectiveTextureOptions options;
+      options.visibility_scale = 0.5;
+      half_visibility = std::make_unique<ProjectiveTexturer>(mesh, options);
+      half_visibility->SetFrame(mesh.vertices, cameras, images);
+    }
+    return *half_visibility;
+  }
+  std::unique_ptr<ProjectiveTexturer> half_visibility;
 };
 
 // Never destroyed: tearing a GL context down from a static destructor can race the driver.
@@ -93,12 +108,39 @@ void BM_TextureFrame(benchmark::State& state) {
   }
 }
 
+void BM_TextureFrame4Views(benchmark::State& state) {
+  Fixture& f = GetFixture();
+  const Camera views[4] = {f.view, RingCamera("novel1", 112.5, 1.2), RingCamera("novel2", 202.5, 1.8),
+                           RingCamera("novel3", 292.5, 1.2)};
+  for (auto _ : state) {
+    f.texturer->SetFrame(f.mesh.vertices, f.cameras, f.images);
+    for (const Camera& view : views) {
+      RenderResult result = f.texturer->Render(view);
+      benchmark::DoNotOptimize(result.color.data.data());
+    }
+  }
+}
+
+void BM_TextureSetFrameHalfVisibility(benchmark::State& state) {
+  Fixture& f = GetFixture();
+  ProjectiveTexturer& texturer = f.HalfVisibility();
+  RowMatrixX3d moved = f.mesh.vertices;
+  double offset = 0.0;
+  for (auto _ : state) {
+    offset = offset > 0.05 ? 0.0 : offset + 0.001;
+    moved.col(0) = f.mesh.vertices.col(0).array() + offset;
+    texturer.SetFrame(moved, f.cameras, f.images);
+  }
+}
+
 #define CONFLUENT_TEXTURE_BENCH(name) \
   BENCHMARK(name)->Unit(benchmark::kMillisecond)->UseRealTime()->Repetitions(5)->ReportAggregatesOnly(true)
 
 CONFLUENT_TEXTURE_BENCH(BM_TextureSetFrame);
 CONFLUENT_TEXTURE_BENCH(BM_TextureRender);
 CONFLUENT_TEXTURE_BENCH(BM_TextureFrame);
+CONFLUENT_TEXTURE_BENCH(BM_TextureFrame4Views);
+CONFLUENT_TEXTURE_BENCH(BM_TextureSetFrameHalfVisibility);
 
 }  // namespace
 }  // namespace confluent

@@ -59,6 +59,18 @@ bool AllFinite(const Eigen::MatrixBase<Derived>& m) {
 
 }  // namespace
 
+Camera ResizedCamera(Camera camera, int width_px, int height_px) {
+  const double sx = static_cast<double>(width_px) / camera.width, sy = static_cast<double>(height_px) / camera.height;
+  camera.K(0, 0) *= sx;
+  camera.K(0, 1) *= sx;
+  camera.K(0, 2) = (camera.K(0, 2) + 0.5) * sx - 0.5;
+  camera.K(1, 1) *= sy;
+  camera.K(1, 2) = (camera.K(1, 2) + 0.5) * sy - 0.5;
+  camera.width = width_px;
+  camera.height = height_px;
+  return camera;
+}
+
 Camera LookAtCamera(const std::string& name, const Eigen::Vector3d& center_in_world,
                     const Eigen::Vector3d& target_in_world, int width_px, int height_px, double focal_px) {
   const Eigen::Vector3d z = (target_in_world - center_in_world).normalized();

@@ -68,6 +68,10 @@ struct Camera {
 Camera LookAtCamera(const std::string& name, const Eigen::Vector3d& center_in_world,
                     const Eigen::Vector3d& target_in_world, int width_px, int height_px, double focal_px);
 
+// The same camera with its image resized to width_px x height_px (K scaled so that pixel
+// centres stay at integers; distortion, which acts on normalised coordinates, is unchanged).
+Camera ResizedCamera(Camera camera, int width_px, int height_px);
+
 // Undistorts an image so it matches the ideal pinhole camera with the same K (bilinear).
 Image UndistortImage(const Camera& camera, const Image& image);
 

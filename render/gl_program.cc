@@ -1,5 +1,8 @@
 #include "render/gl_program.h"
 
+#include <sstream>
+
+#include "core/error.h"
 #include "render/egl_context.h"
 
 namespace confluent::render_internal {
@@ -80,6 +83,27 @@ Eigen::Matrix4d CamFromWorld(const Camera& camera) {
   m.topLeftCorner<3, 3>() = camera.rotation;
   m.topRightCorner<3, 1>() = camera.translation;
   return m;
+}
+
+void CheckVertices(const RowMatrixX3d& vertices, const std::string& name) {
+  for (int v = 0; v < vertices.rows(); ++v)
+    if (!vertices.row(v).allFinite()) {
+      std::ostringstream out;
+      out << "vertex " << v << " has a non-finite coordinate (" << vertices(v, 0) << ", " << vertices(v, 1) << ", "
+          << vertices(v, 2) << ")";
+      throw InputError(name, out.str());
+    }
+}
+
+void CheckFaceIndices(const Mesh& mesh, const std::string& name) {
+  const int n = mesh.num_vertices();
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (mesh.faces(f, k) < 0 || mesh.faces(f, k) >= n) {
+        std::ostringstream out;
+        out << "face " << f << " refers to vertex " << mesh.faces(f, k) << ", but the mesh has " << n << " vertices";
+        throw InputError(name, out.str());
+      }
 }
 
 }  // namespace confluent::render_internal

@@ -8,8 +8,17 @@
 #include <string>
 
 #include "calib/camera.h"
+#include "core/mesh.h"
 
 namespace confluent::render_internal {
+
+// A vertex shader that covers the viewport with one triangle (draw 3 vertices, no buffers).
+constexpr const char* kFullScreenTriangleVertexShader = R"(#version 430 core
+void main() {
+  vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+  gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+)";
 
 // Compiles and links a vertex + fragment shader program. Throws RenderContextError naming
 // `what` (e.g. "projective texture") with the GL log when either step fails.
@@ -25,6 +34,12 @@ Eigen::Matrix4d ClipFromCamera(const Eigen::Matrix3d& K, int width, int height, 
 // when `cull_back_faces` (meshes are counter-clockwise seen from outside, which the y flip of
 // ClipFromCamera makes clockwise in window coordinates).
 void SetMeshRasterState(bool cull_back_faces, GLenum depth_func = GL_LESS);
+
+// Throws InputError(name, ...) naming the first vertex with a non-finite coordinate.
+void CheckVertices(const RowMatrixX3d& vertices, const std::string& name);
+
+// Throws InputError(name, ...) naming the first face that refers to a vertex out of range.
+void CheckFaceIndices(const Mesh& mesh, const std::string& name);
 
 // The camera's cam_from_world as a 4x4 matrix.
 Eigen::Matrix4d CamFromWorld(const Camera& camera);

@@ -1,11 +1,17 @@
-// ProjectiveTexturer: unstructured-lumigraph projective texturing with a GL fragment shader.
+// ProjectiveTexturer: unstructured-lumigraph projective texturing with GL shaders.
 //
-// SetFrame renders each input camera's depth map with MeshRenderer (exact lens distortion),
-// derives a feather map on the CPU (distance to the mesh outline, to depth discontinuities and
-// to the mask outline), and uploads images and (depth, feather) pairs as texture arrays. Render
-// rasterises the mesh into the novel view; each fragment projects its world point into every
-// input camera (distortion applied per fragment), tests visibility against the depth map
-// (shadow-map style) and blends the best k cameras.
+// SetFrame draws every input camera's depth map (depth buffer only, all cameras before the first
+// read-back, so that llvmpipe bins one camera while it rasterises the previous; cameras with lens
+// distortion go through MeshRenderer for exact distortion), reads them back, and derives each
+// feather map on a worker thread (distance to the mesh outline, to depth discontinuities and to
+// the mask outline) while the next map is read. Images and (depth, feather) pairs are uploaded
+// as texture arrays. Render rasterises the mesh into a G-buffer (world point, face normal, base
+// colour) with a cheap shader, then runs the blending once per covered pixel, inside the mesh's
+// projected bounding box: each pixel projects its world point into every input camera
+// (distortion applied), tests visibility against the depth map (shadow-map style), keeps the
+// best k cameras and fetches only their colours. On a software rasteriser with many tiny
+// triangles this matters: a fragment shader runs per triangle on whole 4x4 pixel blocks, so the
+// expensive shader in the rasterisation pass cost several times the covered pixel count.
 
 #include "render/projective_texture.h"
 #include "render/gl_program.h"
@@ -16,6 +22,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <future>
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -28,11 +35,15 @@ namespace confluent {
 namespace {
 
 using render_internal::CamFromWorld;
+using render_internal::CheckFaceIndices;
+using render_internal::CheckVertices;
 using render_internal::ClipFromCamera;
 using render_internal::LinkProgram;
 
 constexpr int kMaxCameras = 32;
 
+// Pass 1 of Render: the mesh into a G-buffer (world point, face normal, base colour), with a cheap
+// fragment shader, so that the cost of many tiny triangles does not multiply the blending cost.
 constexpr const char* kVertexShader = R"(#version 430 core
 layout(location = 0) in vec3 position_in_world;
 layout(location = 1) in vec3 fallback_color;
@@ -46,15 +57,41 @@ void main() {
 }
 )";
 
-// See the header for the weighting. Uniform arrays are indexed by input camera. BEST_K is
-// defined at compile time, so that the running best-(k+1) list below unrolls into registers
-// (dynamically indexed local arrays are very slow on llvmpipe).
-constexpr const char* kFragmentShader = R"(
-#define MAX_CAMERAS 32
-#define SLOTS (BEST_K + 1)
+constexpr const char* kGBufferFragmentShader = R"(#version 430 core
 in vec3 v_position;
 in vec3 v_color;
+layout(location = 0) out vec4 out_position;  // w = 1 where the mesh covers the pixel
+layout(location = 1) out vec4 out_normal;    // face normal, towards the view
+layout(location = 2) out vec4 out_base;      // colour where no camera sees the point
+uniform vec3 view_center;
+uniform int use_vertex_colors;
+uniform vec3 fallback;
+void main() {
+  vec3 X = v_position;
+  vec3 to_view = view_center - X;
+  to_view /= max(length(to_view), 1e-6);
+  vec3 n = cross(dFdx(X), dFdy(X));
+  float n_length = length(n);
+  n = n_length > 0.0 ? n / n_length : to_view;
+  if (dot(n, to_view) < 0.0) n = -n;
+  out_position = vec4(X, 1.0);
+  out_normal = vec4(n, 0.0);
+  out_base = vec4(use_vertex_colors != 0 ? v_color : fallback, 1.0);
+}
+)";
+
+
+// Pass 2 of Render: the blending, once per covered pixel of the G-buffer. See the header for the
+// weighting. Uniform arrays are indexed by input camera. BEST_K is defined at compile time, so
+// that the running best-(k+1) list below unrolls into registers (dynamically indexed local arrays
+// are very slow on llvmpipe). Colours are fetched for the k best cameras only, after the search.
+constexpr const char* kBlendFragmentShader = R"(
+#define MAX_CAMERAS 32
+#define SLOTS (BEST_K + 1)
 layout(location = 0) out vec4 out_color;
+uniform sampler2D g_position;
+uniform sampler2D g_normal;
+uniform sampler2D g_base;
 uniform int num_cameras;
 uniform mat3 cam_rotation[MAX_CAMERAS];
 uniform vec3 cam_translation[MAX_CAMERAS];
@@ -65,34 +102,36 @@ uniform float cam_k3[MAX_CAMERAS];
 uniform vec2 cam_size[MAX_CAMERAS];
 uniform vec3 cam_center[MAX_CAMERAS];
 uniform vec3 cam_gain[MAX_CAMERAS];
-uniform vec2 atlas_size;
+uniform vec2 vis_scale[MAX_CAMERAS];  // depth-map pixels per image pixel, x and y
+uniform vec2 vis_size[MAX_CAMERAS];   // depth-map size
+uniform vec2 image_atlas_size;
+uniform vec2 depth_atlas_size;
 uniform sampler2DArray images;
 uniform sampler2DArray depth_feather;
 uniform vec3 view_center;
 uniform float depth_bias;
 uniform float resolution_weight;
 uniform float grazing_cos;
-uniform int use_vertex_colors;
-uniform vec3 fallback;
 
 void main() {
-  vec3 X = v_position;
+  ivec2 pixel_in_view = ivec2(gl_FragCoord.xy);
+  vec4 g = texelFetch(g_position, pixel_in_view, 0);
+  if (g.w == 0.0) discard;  // background: stays transparent
+  vec3 X = g.xyz;
+  vec3 n = texelFetch(g_normal, pixel_in_view, 0).xyz;
   vec3 to_view = view_center - X;
   float view_distance = max(length(to_view), 1e-6);
   to_view /= view_distance;
-  vec3 n = cross(dFdx(X), dFdy(X));
-  float n_length = length(n);
-  n = n_length > 0.0 ? n / n_length : to_view;
-  if (dot(n, to_view) < 0.0) n = -n;
 
-  // The SLOTS smallest penalties so far, ascending, with their colour and quality.
+  // The SLOTS smallest penalties so far, ascending, with their quality and texture coordinate
+  // (uv, camera layer).
   float slot_penalty[SLOTS];
-  vec3 slot_color[SLOTS];
   float slot_quality[SLOTS];
+  vec3 slot_uvl[SLOTS];
   for (int s = 0; s < SLOTS; ++s) {
     slot_penalty[s] = 1e30;
-    slot_color[s] = vec3(0.0);
     slot_quality[s] = 0.0;
+    slot_uvl[s] = vec3(0.0);
   }
   int count = 0;
   for (int i = 0; i < num_cameras; ++i) {
@@ -113,11 +152,11 @@ void main() {
     if (pixel.x < -0.5 || pixel.y < -0.5 || pixel.x > size.x - 0.5 || pixel.y > size.y - 0.5) continue;
     // Shadow-map test against the farthest of the 4 surrounding depth texels (lenient on slanted
     // surfaces; occlusion edges are feathered anyway), feather from the nearest texel.
-    vec2 uv = (pixel + 0.5) / atlas_size;
-    vec4 depths = textureGather(depth_feather, vec3(uv, float(i)), 0);
+    vec2 pixel_in_map = (pixel + 0.5) * vis_scale[i];  // texel centres at +0.5
+    vec4 depths = textureGather(depth_feather, vec3(pixel_in_map / depth_atlas_size, float(i)), 0);
     float depth = max(max(depths.x, depths.y), max(depths.z, depths.w));
     if (depth <= 0.0 || p.z > depth + depth_bias) continue;
-    ivec2 texel = clamp(ivec2(floor(pixel + 0.5)), ivec2(0), ivec2(size) - 1);
+    ivec2 texel = clamp(ivec2(floor(pixel_in_map)), ivec2(0), ivec2(vis_size[i]) - 1);
     float feather = texelFetch(depth_feather, ivec3(texel, i), 0).g;
     if (feather <= 0.0) continue;
     vec3 to_camera = cam_center[i] - X;
@@ -131,34 +170,48 @@ void main() {
     // Angle between the rays: sqrt(2 - 2 cos) is the chord, within 5% of the angle below 60 deg.
     float angle = sqrt(max(2.0 - 2.0 * dot(to_view, to_camera), 0.0));
     float penalty = max(angle + resolution_weight * max(0.0, camera_distance - view_distance) / view_distance, 1e-4);
-    vec3 color = texture(images, vec3(uv, float(i))).rgb * cam_gain[i];
+    vec3 uvl = vec3((pixel + 0.5) / image_atlas_size, float(i));
     ++count;
     for (int s = 0; s < SLOTS; ++s) {  // insertion into the sorted slots
       bool take = penalty < slot_penalty[s];
       float kept_penalty = slot_penalty[s];
-      vec3 kept_color = slot_color[s];
       float kept_quality = slot_quality[s];
+      vec3 kept_uvl = slot_uvl[s];
       slot_penalty[s] = take ? penalty : kept_penalty;
-      slot_color[s] = take ? color : kept_color;
       slot_quality[s] = take ? q : kept_quality;
+      slot_uvl[s] = take ? uvl : kept_uvl;
       penalty = take ? kept_penalty : penalty;
-      color = take ? kept_color : color;
       q = take ? kept_quality : q;
+      uvl = take ? kept_uvl : uvl;
     }
   }
 
-  vec3 base = use_vertex_colors != 0 ? v_color : fallback;
   // Threshold t: the (k+1)-th smallest penalty, or pi when k or fewer cameras see X.
   float threshold = count > BEST_K ? slot_penalty[BEST_K] : 3.14159265;
   vec3 sum = vec3(0.0);
   float total = 0.0;
   for (int s = 0; s < BEST_K; ++s) {
     float w = slot_penalty[s] < threshold ? (1.0 - slot_penalty[s] / threshold) / slot_penalty[s] * slot_quality[s] : 0.0;
-    sum += w * slot_color[s];
-    total += w;
+    if (w > 0.0) {
+      sum += w * textureLod(images, slot_uvl[s], 0.0).rgb * cam_gain[int(slot_uvl[s].z)];
+      total += w;
+    }
   }
+  vec3 base = texelFetch(g_base, pixel_in_view, 0).rgb;
   out_color = vec4(total > 0.0 ? clamp(sum / total, 0.0, 1.0) : base, 1.0);
 }
+)";
+
+// Depth maps of the input cameras (SetFrame): depth buffer only (no colour, no varyings, the
+// cheapest pass llvmpipe has); camera z is recovered from the window depth on the CPU.
+constexpr const char* kDepthVertexShader = R"(#version 430 core
+layout(location = 0) in vec3 position_in_world;
+uniform mat4 clip_from_world;
+void main() { gl_Position = clip_from_world * vec4(position_in_world, 1.0); }
+)";
+
+constexpr const char* kDepthFragmentShader = R"(#version 430 core
+void main() {}
 )";
 
 float Smoothstep(float edge, float x) {
@@ -170,11 +223,34 @@ float Smoothstep(float edge, float x) {
 // Per-camera data kept on the CPU for the colour balance fit.
 struct CameraFrame {
   Camera camera;
-  Image depth;           // float camera z, 0 = background
-  cv::Mat feather;       // CV_32F in [0,1]
+  Camera map_camera;  // the camera at the resolution of the depth and feather maps
+  const float* depth_feather = nullptr;  // interleaved (camera z, feather) per map pixel, row-major
   const Image* image = nullptr;
   int visible_pixels = 0;
+
+  float depth(int x, int y) const { return depth_feather[2 * (static_cast<std::size_t>(y) * map_camera.width + x)]; }
+  float feather(int x, int y) const {
+    return depth_feather[2 * (static_cast<std::size_t>(y) * map_camera.width + x) + 1];
+  }
 };
+
+// The camera with its image resized by `scale` (at least 1 pixel).
+Camera Scaled(const Camera& camera, double scale) {
+  if (scale == 1.0) return camera;
+  return ResizedCamera(camera, std::max(1, static_cast<int>(std::lround(camera.width * scale))),
+                       std::max(1, static_cast<int>(std::lround(camera.height * scale))));
+}
+
+// `mask` at width x height (itself when the size matches or it is empty; else an area-averaged
+// copy in `storage`, thresholded at half coverage).
+const Image& ScaledMask(const Image& mask, int width, int height, Image* storage) {
+  if (mask.empty() || (mask.width == width && mask.height == height)) return mask;
+  cv::Mat resized;
+  cv::resize(AsCvMat(mask), resized, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+  cv::threshold(resized, resized, 127, 255, cv::THRESH_BINARY);
+  *storage = ImageFromCvMat(resized);
+  return *storage;
+}
 
 // Bilinear RGB sample of an RGB8 image at a pixel position (centres at integers), in [0,1].
 Eigen::Vector3d SampleRgb(const Image& image, const Eigen::Vector2d& pixel) {
@@ -192,6 +268,101 @@ Eigen::Vector3d SampleRgb(const Image& image, const Eigen::Vector2d& pixel) {
   return value;
 }
 
+// Window depth (GL depth buffer in [0, 1] of ClipFromCamera's projection) -> camera z, in place;
+// the cleared value 1 (nothing drawn) -> 0.
+void WindowDepthToCameraZ(double near_m, double far_m, std::vector<float>* depth) {
+  const double a = (far_m + near_m) / (far_m - near_m), b = -2.0 * far_m * near_m / (far_m - near_m);
+  for (float& d : *depth) d = d >= 1.0f ? 0.0f : static_cast<float>(b / ((2.0 * d - 1.0) - a));
+}
+
+// Depth and feather map of one camera, interleaved into `out` (2 floats per pixel, w x h):
+// camera z (0 = not covered) and smoothstep(0, feather_px, distance to the nearest outline pixel
+// of the mesh, depth discontinuity or mask outline), 0 outside the mesh or the mask; feather_px in
+// map pixels. Returns the number of covered pixels. Thread-safe (reads only its arguments).
+int DepthFeatherMap(const float* z, int w, int h, const Image& mask, const ProjectiveTextureOptions& options,
+                    double feather_px, float* out) {
+  // Region of interest: covered pixels plus the feather margin.
+  int min_x = w, min_y = h, max_x = -1, max_y = -1, count = 0;
+  for (int y = 0; y < h; ++y) {
+    const float* row = z + static_cast<std::size_t>(y) * w;
+    float* out_row = out + 2 * static_cast<std::size_t>(y) * w;
+    int row_min = w, row_max = -1, row_count = 0;
+    for (int x = 0; x < w; ++x) {
+      const bool c = row[x] > 0.0f;
+      out_row[2 * x] = row[x];
+      out_row[2 * x + 1] = 0.0f;
+      row_count += c;
+      if (c) {
+        row_min = std::min(row_min, x);
+        row_max = x;
+      }
+    }
+    if (row_count > 0) {
+      count += row_count;
+      min_x = std::min(min_x, row_min);
+      max_x = std::max(max_x, row_max);
+      min_y = std::min(min_y, y);
+      max_y = y;
+    }
+  }
+  if (count == 0) return 0;
+  const bool use_mask = !mask.empty();
+  const std::uint8_t* mask_data = use_mask ? mask.data.data() : nullptr;
+  auto covered_in_mask = [&](std::size_t p) { return z[p] > 0.0f && (!use_mask || mask_data[p] != 0); };
+  const int margin = static_cast<int>(std::ceil(feather_px)) + 2;
+  const int x0 = std::max(0, min_x - margin), y0 = std::max(0, min_y - margin);
+  const int x1 = std::min(w - 1, max_x + margin), y1 = std::min(h - 1, max_y + margin);
+  const int rw = x1 - x0 + 1, rh = y1 - y0 + 1;
+  if (feather_px <= 0.0) {
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const std::size_t p = static_cast<std::size_t>(y) * w + x;
+        out[2 * p + 1] = covered_in_mask(p) ? 1.0f : 0.0f;
+      }
+    return count;
+  }
+  // Edge pixels are 0, others 255 (distanceTransform measures the distance to the nearest 0).
+  cv::Mat not_edge(rh, rw, CV_8U, cv::Scalar(255));
+  const float jump = static_cast<float>(options.depth_edge_m);
+  const bool mask_edges = use_mask && options.feather_mask_edges;
+  for (int y = y0; y <= y1; ++y) {
+    std::uint8_t* edge_row = not_edge.ptr<std::uint8_t>(y - y0);
+    for (int x = x0; x <= x1; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * w + x;
+      const float d = z[p];
+      const bool c = d > 0.0f;
+      const bool m = mask_edges && mask_data[p] != 0;
+      bool edge = false;
+      const int nx[4] = {x - 1, x + 1, x, x};
+      const int ny[4] = {y, y, y - 1, y + 1};
+      for (int k = 0; k < 4 && !edge; ++k) {
+        if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h) {
+          edge = c;  // the image border is an edge of what the camera sees
+          continue;
+        }
+        const std::size_t q = static_cast<std::size_t>(ny[k]) * w + nx[k];
+        const float dn = z[q];
+        if ((dn > 0.0f) != c) edge = true;
+        else if (c && std::abs(dn - d) > jump) edge = true;
+        else if (mask_edges && (mask_data[q] != 0) != m) edge = true;
+      }
+      if (edge) edge_row[x - x0] = 0;
+    }
+  }
+  cv::Mat distance;
+  cv::distanceTransform(not_edge, distance, cv::DIST_L2, cv::DIST_MASK_5);
+  const float width = static_cast<float>(feather_px);
+  for (int y = y0; y <= y1; ++y) {
+    const float* distance_row = distance.ptr<float>(y - y0);
+    for (int x = x0; x <= x1; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * w + x;
+      // +0.5: an edge pixel itself is half a pixel from the outline.
+      if (covered_in_mask(p)) out[2 * p + 1] = Smoothstep(width, distance_row[x - x0] + 0.5f);
+    }
+  }
+  return count;
+}
+
 }  // namespace
 
 void ProjectiveTextureOptions::Check() const {
@@ -203,6 +374,8 @@ void ProjectiveTextureOptions::Check() const {
   if (!(resolution_weight >= 0.0) || !std::isfinite(resolution_weight))
     throw UsageError("resolution_weight must be >= 0");
   if (!(grazing_cos >= 0.0 && grazing_cos <= 1.0)) throw UsageError("grazing_cos must be in [0, 1]");
+  if (!(visibility_scale > 0.0 && visibility_scale <= 1.0))
+    throw UsageError("visibility_scale must be in (0, 1], got " + std::to_string(visibility_scale));
   if (colour_balance_samples < 1) throw UsageError("colour_balance_samples must be >= 1");
   if (!fallback_color.allFinite() || !background.allFinite()) throw UsageError("colours must be finite");
 }
@@ -210,25 +383,45 @@ void ProjectiveTextureOptions::Check() const {
 struct ProjectiveTexturer::Impl {
   ProjectiveTextureOptions options;
   MeshRendererOptions renderer_options;
-  MeshRenderer renderer;
+  // Depth maps of input cameras with lens distortion (exact distortion); created on first use.
+  std::unique_ptr<MeshRenderer> distortion_renderer;
   int mesh_handle = 0;
+  Mesh mesh_topology;  // initial vertices and faces, for distortion_renderer
   EglContext context;
   int num_vertices = 0;
   int num_faces = 0;
   bool has_colors = false;
 
-  GLuint program = 0;
-  GLuint vertex_array = 0;
+  GLuint gbuffer_program = 0, blend_program = 0, depth_program = 0;
+  GLuint vertex_array = 0, empty_vertex_array = 0;
   GLuint position_buffer = 0;
   GLuint color_buffer = 0;
   GLuint index_buffer = 0;
   GLuint image_array = 0;
   GLuint depth_array = 0;
-  int atlas_width = 0, atlas_height = 0, atlas_layers = 0;
-  GLuint framebuffer = 0, color_renderbuffer = 0, depth_renderbuffer = 0;
+  struct Atlas {
+    int width = 0, height = 0, layers = 0;
+  };
+  Atlas image_atlas, depth_atlas;  // sizes of image_array and depth_array
+  // Render targets: the G-buffer (pass 1) and the blended colour (pass 2).
+  GLuint gbuffer_framebuffer = 0, output_framebuffer = 0;
+  GLuint gbuffer_textures[3] = {0, 0, 0};  // world point RGBA32F, normal RGBA16F, base colour RGBA8
+  GLuint gbuffer_depth = 0, output_color = 0;
   int fb_width = 0, fb_height = 0;
+  // Render target of the input cameras' depth maps.
+  // Render targets of the input cameras' depth maps, one per camera, so that all are drawn before
+  // the first is read back (llvmpipe bins the next camera while it rasterises the previous one).
+  struct DepthTarget {
+    GLuint framebuffer = 0, depth = 0;
+    int width = 0, height = 0;
+  };
+  std::vector<DepthTarget> depth_targets;
   std::vector<float> scratch;
   std::vector<std::uint8_t> readback;
+  std::vector<std::vector<float>> camera_z;       // per camera: depth map read back
+  std::vector<std::vector<float>> depth_feather;  // per camera: interleaved depth and feather
+  std::vector<Image> scaled_masks;                // per camera: mask at the depth maps' resolution
+  std::vector<Camera> vis_cameras;                // input cameras at the depth maps' resolution
 
   bool frame_set = false;
   std::vector<Camera> cameras;
@@ -244,16 +437,20 @@ struct ProjectiveTexturer::Impl {
   std::vector<ViewMap> view_maps;
 
   Impl(const Mesh& mesh, const ProjectiveTextureOptions& texture_options, const MeshRendererOptions& render_options)
-      : options(texture_options), renderer_options(render_options), renderer(render_options),
-        context(render_options.context) {
-    mesh_handle = renderer.AddMesh(mesh, "mesh");  // validates the mesh
+      : options(texture_options), renderer_options(render_options), context(render_options.context) {
+    ValidateMesh(mesh);
+    mesh_topology.vertices = mesh.vertices;
+    mesh_topology.faces = mesh.faces;
     num_vertices = mesh.num_vertices();
     num_faces = mesh.num_faces();
     has_colors = mesh.has_colors();
     context.MakeCurrent();
-    const std::string fragment = "#version 430 core\n#define BEST_K " + std::to_string(options.best_k) + "\n" +
-                                 kFragmentShader;
-    program = LinkProgram(kVertexShader, fragment, "projective texture");
+    const std::string blend = "#version 430 core\n#define BEST_K " + std::to_string(options.best_k) + "\n" +
+                              kBlendFragmentShader;
+    gbuffer_program = LinkProgram(kVertexShader, kGBufferFragmentShader, "projective texture (G-buffer)");
+    blend_program = LinkProgram(render_internal::kFullScreenTriangleVertexShader, blend, "projective texture (blending)");
+    depth_program = LinkProgram(kDepthVertexShader, kDepthFragmentShader, "projective texture (depth maps)");
+    glGenVertexArrays(1, &empty_vertex_array);
     glGenVertexArrays(1, &vertex_array);
     glBindVertexArray(vertex_array);
     glGenBuffers(1, &position_buffer);
@@ -292,15 +489,23 @@ struct ProjectiveTexturer::Impl {
     } catch (...) {
       return;
     }
-    glDeleteProgram(program);
+    glDeleteProgram(gbuffer_program);
+    glDeleteProgram(blend_program);
+    glDeleteProgram(depth_program);
     const GLuint buffers[] = {position_buffer, color_buffer, index_buffer};
     glDeleteBuffers(3, buffers);
-    glDeleteVertexArrays(1, &vertex_array);
-    const GLuint textures[] = {image_array, depth_array};
-    glDeleteTextures(2, textures);
-    glDeleteFramebuffers(1, &framebuffer);
-    const GLuint renderbuffers[] = {color_renderbuffer, depth_renderbuffer};
+    const GLuint arrays[] = {vertex_array, empty_vertex_array};
+    glDeleteVertexArrays(2, arrays);
+    const GLuint textures[] = {image_array, depth_array, gbuffer_textures[0], gbuffer_textures[1], gbuffer_textures[2]};
+    glDeleteTextures(5, textures);
+    const GLuint framebuffers[] = {gbuffer_framebuffer, output_framebuffer};
+    glDeleteFramebuffers(2, framebuffers);
+    const GLuint renderbuffers[] = {gbuffer_depth, output_color};
     glDeleteRenderbuffers(2, renderbuffers);
+    for (const DepthTarget& target : depth_targets) {
+      glDeleteFramebuffers(1, &target.framebuffer);
+      glDeleteRenderbuffers(1, &target.depth);
+    }
   }
 
   static void CheckGl(const std::string& step) {
@@ -312,6 +517,18 @@ struct ProjectiveTexturer::Impl {
     }
   }
 
+  // The checks of MeshRenderer::AddMesh that matter here: finite vertices, face indices in range,
+  // colours.
+  static void ValidateMesh(const Mesh& mesh) {
+    CheckVertices(mesh.vertices, "mesh");
+    CheckFaceIndices(mesh, "mesh");
+    const int n = mesh.num_vertices();
+    if (mesh.colors.rows() != 0 && mesh.colors.rows() != n)
+      throw InputError("mesh", "has " + std::to_string(mesh.colors.rows()) + " vertex colours for " +
+                                   std::to_string(n) + " vertices");
+    if (mesh.has_colors() && !mesh.colors.allFinite()) throw InputError("mesh", "vertex colours contain NaN");
+  }
+
   void UploadPositions(const RowMatrixX3d& vertices) {
     scratch.resize(static_cast<std::size_t>(num_vertices) * 3);
     for (int v = 0; v < num_vertices; ++v)
@@ -320,70 +537,52 @@ struct ProjectiveTexturer::Impl {
     glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(scratch.size() * sizeof(float)), scratch.data());
   }
 
-  // Feather map of one camera: smoothstep(0, feather_px, distance to the nearest outline pixel
-  // of the mesh, depth discontinuity or mask outline); 0 outside the mesh or the mask.
-  cv::Mat FeatherMap(const Image& depth, const Image& mask, int* visible) const {
-    const int w = depth.width, h = depth.height;
-    cv::Mat feather(h, w, CV_32F, cv::Scalar(0.0f));
-    // Region of interest: covered pixels plus the feather margin.
-    int min_x = w, min_y = h, max_x = -1, max_y = -1, count = 0;
-    const float* z = depth.ptr<float>();
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x)
-        if (z[static_cast<std::size_t>(y) * w + x] > 0.0f) {
-          min_x = std::min(min_x, x);
-          max_x = std::max(max_x, x);
-          min_y = std::min(min_y, y);
-          max_y = std::max(max_y, y);
-          ++count;
-        }
-    *visible = count;
-    if (count == 0) return feather;
-    const int margin = static_cast<int>(std::ceil(options.feather_px)) + 2;
-    const int x0 = std::max(0, min_x - margin), y0 = std::max(0, min_y - margin);
-    const int x1 = std::min(w - 1, max_x + margin), y1 = std::min(h - 1, max_y + margin);
-    const int rw = x1 - x0 + 1, rh = y1 - y0 + 1;
-    const bool use_mask = !mask.empty();
-    auto covered = [&](int x, int y) { return z[static_cast<std::size_t>(y) * w + x] > 0.0f; };
-    auto in_mask = [&](int x, int y) { return !use_mask || mask.at<std::uint8_t>(x, y) != 0; };
-    if (options.feather_px <= 0.0) {
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) feather.at<float>(y, x) = covered(x, y) && in_mask(x, y) ? 1.0f : 0.0f;
-      return feather;
+  // Draws the window depth of the mesh (current vertex buffer) in undistorted camera `i` into its
+  // depth target; ReadDepth reads it back.
+  void DrawDepth(int i, const Camera& camera) {
+    const int w = camera.width, h = camera.height;
+    if (static_cast<int>(depth_targets.size()) <= i) depth_targets.resize(i + 1);
+    DepthTarget& target = depth_targets[i];
+    if (target.framebuffer == 0) {
+      glGenFramebuffers(1, &target.framebuffer);
+      glGenRenderbuffers(1, &target.depth);
     }
-    // Edge pixels are 0, others 255 (distanceTransform measures the distance to the nearest 0).
-    cv::Mat not_edge(rh, rw, CV_8U, cv::Scalar(255));
-    const float jump = static_cast<float>(options.depth_edge_m);
-    const bool mask_edges = use_mask && options.feather_mask_edges;
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        const bool c = covered(x, y);
-        const float d = z[static_cast<std::size_t>(y) * w + x];
-        bool edge = false;
-        const int nx[4] = {x - 1, x + 1, x, x};
-        const int ny[4] = {y, y, y - 1, y + 1};
-        for (int k = 0; k < 4 && !edge; ++k) {
-          if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h) {
-            edge = c;  // the image border is an edge of what the camera sees
-            continue;
-          }
-          const float dn = z[static_cast<std::size_t>(ny[k]) * w + nx[k]];
-          if ((dn > 0.0f) != c) edge = true;
-          else if (c && std::abs(dn - d) > jump) edge = true;
-          else if (mask_edges && (mask.at<std::uint8_t>(nx[k], ny[k]) != 0) != (mask.at<std::uint8_t>(x, y) != 0))
-            edge = true;
-        }
-        if (edge) not_edge.at<std::uint8_t>(y - y0, x - x0) = 0;
-      }
-    cv::Mat distance;
-    cv::distanceTransform(not_edge, distance, cv::DIST_L2, cv::DIST_MASK_5);
-    const float width = static_cast<float>(options.feather_px);
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x)
-        if (covered(x, y) && in_mask(x, y))
-          // +0.5: an edge pixel itself is half a pixel from the outline.
-          feather.at<float>(y, x) = Smoothstep(width, distance.at<float>(y - y0, x - x0) + 0.5f);
-    return feather;
+    glBindFramebuffer(GL_FRAMEBUFFER, target.framebuffer);
+    if (target.width != w || target.height != h) {
+      glBindRenderbuffer(GL_RENDERBUFFER, target.depth);
+      glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
+      glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, target.depth);
+      glDrawBuffer(GL_NONE);
+      glReadBuffer(GL_NONE);
+      if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw RenderContextError("OpenGL: projective texture depth framebuffer " + std::to_string(w) + "x" +
+                                 std::to_string(h) + " is incomplete");
+      target.width = w;
+      target.height = h;
+    }
+    glViewport(0, 0, w, h);
+    const GLfloat far_depth = 1.0f;
+    glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    render_internal::SetMeshRasterState(options.cull_back_faces, GL_LESS);
+    const Eigen::Matrix4f clip_from_world =
+        (ClipFromCamera(camera.K, w, h, renderer_options.near_m, renderer_options.far_m) * CamFromWorld(camera))
+            .cast<float>();
+    glUseProgram(depth_program);
+    glUniformMatrix4fv(glGetUniformLocation(depth_program, "clip_from_world"), 1, GL_FALSE, clip_from_world.data());
+    glBindVertexArray(vertex_array);
+    glDrawElements(GL_TRIANGLES, num_faces * 3, GL_UNSIGNED_INT, nullptr);
+    glBindVertexArray(0);
+    glDisable(GL_CULL_FACE);
+    CheckGl("depth map of camera " + camera.name);
+  }
+
+  // Window depth drawn by DrawDepth(i, camera) into `out` (w x h, top row first; 1 where not
+  // covered). WindowDepthToCameraZ converts it.
+  void ReadDepth(int i, const Camera& camera, std::vector<float>* out) {
+    out->resize(static_cast<std::size_t>(camera.width) * camera.height);
+    glBindFramebuffer(GL_FRAMEBUFFER, depth_targets[i].framebuffer);
+    glReadPixels(0, 0, camera.width, camera.height, GL_DEPTH_COMPONENT, GL_FLOAT, out->data());
+    CheckGl("reading the depth map of camera " + camera.name);
   }
 
   // Least-squares per-camera RGB gains from surface points seen well by several cameras.
@@ -407,9 +606,13 @@ struct ProjectiveTexturer::Impl {
         if (!frame.camera.ProjectChecked(X, &pixel)) continue;
         const int px = static_cast<int>(std::lround(pixel.x())), py = static_cast<int>(std::lround(pixel.y()));
         if (px < 0 || py < 0 || px >= frame.camera.width || py >= frame.camera.height) continue;
-        const float depth = frame.depth.at<float>(px, py);
+        // The same pixel in the depth and feather maps (texel centres at +0.5).
+        const Camera& map = frame.map_camera;
+        const int mx = std::min(map.width - 1, static_cast<int>((px + 0.5) * map.width / frame.camera.width));
+        const int my = std::min(map.height - 1, static_cast<int>((py + 0.5) * map.height / frame.camera.height));
+        const float depth = frame.depth(mx, my);
         if (depth <= 0.0f || frame.camera.PointInCamera(X).z() > depth + options.depth_bias_m) continue;
-        if (frame.feather.at<float>(py, px) < 0.99f) continue;
+        if (frame.feather(mx, my) < 0.99f) continue;
         const Eigen::Vector3d rgb = SampleRgb(*frame.image, pixel);
         if (rgb.minCoeff() < 0.03 || rgb.maxCoeff() > 0.97) continue;  // log of clipped values is unreliable
         seen.push_back(i);
@@ -474,36 +677,83 @@ struct ProjectiveTexturer::Impl {
         rgb[i] = &converted[i];
       }
     }
-    renderer.UpdateVertices(mesh_handle, vertices);  // throws InputError for NaN vertices
+    CheckVertices(vertices, "mesh");
+    context.MakeCurrent();
+    UploadPositions(vertices);
 
+    // Depth maps on the GPU (one camera after the other); each camera's feather map is computed
+    // on a worker thread while the next depth map renders.
+    camera_z.resize(std::max<std::size_t>(camera_z.size(), n));
+    depth_feather.resize(std::max<std::size_t>(depth_feather.size(), n));
     std::vector<CameraFrame> frames(n);
+    std::vector<std::future<int>> feathers(n);
+    vis_cameras.clear();
+    for (const Camera& camera : input_cameras) vis_cameras.push_back(Scaled(camera, options.visibility_scale));
+    const double feather_px = options.feather_px * options.visibility_scale;
+    bool distortion_vertices_set = false;
+    static const Image kNoMask;
+    scaled_masks.resize(n);
+    for (int i = 0; i < n; ++i)
+      if (!vis_cameras[i].has_distortion()) DrawDepth(i, vis_cameras[i]);
+    try {
+      for (int i = 0; i < n; ++i) {
+        const Camera& camera = vis_cameras[i];
+        bool window_depth = false;
+        if (camera.has_distortion()) {
+          if (!distortion_renderer) {
+            distortion_renderer = std::make_unique<MeshRenderer>(renderer_options);
+            mesh_handle = distortion_renderer->AddMesh(mesh_topology, "mesh");
+          }
+          if (!distortion_vertices_set) distortion_renderer->UpdateVertices(mesh_handle, vertices);
+          distortion_vertices_set = true;
+          RenderRequest request;
+          request.color = false;
+          request.depth = true;
+          request.cull_back_faces = options.cull_back_faces;
+          const Image depth = distortion_renderer->Render(camera, request).depth;
+          camera_z[i].assign(depth.ptr<float>(), depth.ptr<float>() + depth.data.size() / sizeof(float));
+          context.MakeCurrent();
+        } else {
+          ReadDepth(i, camera, &camera_z[i]);
+          window_depth = true;
+        }
+        depth_feather[i].resize(static_cast<std::size_t>(camera.width) * camera.height * 2);
+        const Image& mask = masks.empty() ? kNoMask : masks[i];
+        const Image& map_mask = ScaledMask(mask, camera.width, camera.height, &scaled_masks[i]);
+        feathers[i] = std::async(std::launch::async, [this, i, &camera, &map_mask, feather_px, window_depth] {
+          if (window_depth) WindowDepthToCameraZ(renderer_options.near_m, renderer_options.far_m, &camera_z[i]);
+          return DepthFeatherMap(camera_z[i].data(), camera.width, camera.height, map_mask, options, feather_px,
+                                 depth_feather[i].data());
+        });
+      }
+    } catch (...) {
+      for (std::future<int>& feather : feathers)
+        if (feather.valid()) feather.wait();
+      throw;
+    }
     info = TextureFrameInfo();
-    RenderRequest request;
-    request.color = false;
-    request.depth = true;
-    request.cull_back_faces = options.cull_back_faces;
     for (int i = 0; i < n; ++i) {
       frames[i].camera = input_cameras[i];
-      frames[i].depth = renderer.Render(input_cameras[i], request).depth;
+      frames[i].map_camera = vis_cameras[i];
+      frames[i].depth_feather = depth_feather[i].data();
       frames[i].image = rgb[i];
-      static const Image kNoMask;
-      frames[i].feather = FeatherMap(frames[i].depth, masks.empty() ? kNoMask : masks[i], &frames[i].visible_pixels);
+      frames[i].visible_pixels = feathers[i].get();
       info.visible_pixels.push_back(frames[i].visible_pixels);
     }
     gains = options.colour_balance ? FitGains(vertices, frames) : std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Ones());
     info.colour_gains = gains;
 
     // Upload to the texture arrays (layers sized to the largest camera).
-    context.MakeCurrent();
-    int width = 1, height = 1;
-    for (const Camera& camera : input_cameras) {
-      width = std::max(width, camera.width);
-      height = std::max(height, camera.height);
+    int width = 1, height = 1, map_width = 1, map_height = 1;
+    for (int i = 0; i < n; ++i) {
+      width = std::max(width, input_cameras[i].width);
+      height = std::max(height, input_cameras[i].height);
+      map_width = std::max(map_width, vis_cameras[i].width);
+      map_height = std::max(map_height, vis_cameras[i].height);
     }
     const int layers = std::max(n, 1);
-    if (width != atlas_width || height != atlas_height || layers != atlas_layers) {
-      const GLuint old[] = {image_array, depth_array};
-      glDeleteTextures(2, old);
+    if (width != image_atlas.width || height != image_atlas.height || layers != image_atlas.layers) {
+      glDeleteTextures(1, &image_array);
       glGenTextures(1, &image_array);
       glBindTexture(GL_TEXTURE_2D_ARRAY, image_array);
       glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RGBA8, width, height, layers);
@@ -511,62 +761,98 @@ struct ProjectiveTexturer::Impl {
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+      image_atlas = {width, height, layers};
+    }
+    if (map_width != depth_atlas.width || map_height != depth_atlas.height || layers != depth_atlas.layers) {
+      glDeleteTextures(1, &depth_array);
       glGenTextures(1, &depth_array);
       glBindTexture(GL_TEXTURE_2D_ARRAY, depth_array);
-      glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RG32F, width, height, layers);
+      glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RG32F, map_width, map_height, layers);
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_BORDER);
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_BORDER);
       const float border[4] = {0.0f, 0.0f, 0.0f, 0.0f};
       glTexParameterfv(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_BORDER_COLOR, border);
-      atlas_width = width;
-      atlas_height = height;
-      atlas_layers = layers;
+      depth_atlas = {map_width, map_height, layers};
     }
-    std::vector<float> depth_feather;
     for (int i = 0; i < n; ++i) {
-      const int w = input_cameras[i].width, h = input_cameras[i].height;
       glBindTexture(GL_TEXTURE_2D_ARRAY, image_array);
-      glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, i, w, h, 1, GL_RGB, GL_UNSIGNED_BYTE, rgb[i]->data.data());
-      depth_feather.resize(static_cast<std::size_t>(w) * h * 2);
-      const float* z = frames[i].depth.ptr<float>();
-      for (int y = 0; y < h; ++y) {
-        const float* f = frames[i].feather.ptr<float>(y);
-        for (int x = 0; x < w; ++x) {
-          const std::size_t p = static_cast<std::size_t>(y) * w + x;
-          depth_feather[2 * p] = z[p];
-          depth_feather[2 * p + 1] = f[x];
-        }
-      }
+      glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, i, input_cameras[i].width, input_cameras[i].height, 1, GL_RGB,
+                      GL_UNSIGNED_BYTE, rgb[i]->data.data());
       glBindTexture(GL_TEXTURE_2D_ARRAY, depth_array);
-      glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, i, w, h, 1, GL_RG, GL_FLOAT, depth_feather.data());
+      glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, i, vis_cameras[i].width, vis_cameras[i].height, 1, GL_RG, GL_FLOAT,
+                      depth_feather[i].data());
     }
-    UploadPositions(vertices);
     CheckGl("upload");
     cameras = input_cameras;
     frame_set = true;
   }
 
   void EnsureFramebuffer(int width, int height) {
-    if (framebuffer != 0 && width == fb_width && height == fb_height) return;
-    if (framebuffer == 0) {
-      glGenFramebuffers(1, &framebuffer);
-      glGenRenderbuffers(1, &color_renderbuffer);
-      glGenRenderbuffers(1, &depth_renderbuffer);
+    if (gbuffer_framebuffer != 0 && width == fb_width && height == fb_height) return;
+    if (gbuffer_framebuffer == 0) {
+      glGenFramebuffers(1, &gbuffer_framebuffer);
+      glGenFramebuffers(1, &output_framebuffer);
+      glGenRenderbuffers(1, &gbuffer_depth);
+      glGenRenderbuffers(1, &output_color);
     }
-    glBindRenderbuffer(GL_RENDERBUFFER, color_renderbuffer);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
-    glBindRenderbuffer(GL_RENDERBUFFER, depth_renderbuffer);
+    const GLuint old[] = {gbuffer_textures[0], gbuffer_textures[1], gbuffer_textures[2]};
+    glDeleteTextures(3, old);
+    glGenTextures(3, gbuffer_textures);
+    const GLenum formats[3] = {GL_RGBA32F, GL_RGBA16F, GL_RGBA8};
+    glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_framebuffer);
+    for (int k = 0; k < 3; ++k) {
+      glBindTexture(GL_TEXTURE_2D, gbuffer_textures[k]);
+      glTexStorage2D(GL_TEXTURE_2D, 1, formats[k], width, height);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + k, GL_TEXTURE_2D, gbuffer_textures[k], 0);
+    }
+    glBindRenderbuffer(GL_RENDERBUFFER, gbuffer_depth);
     glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, width, height);
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color_renderbuffer);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_renderbuffer);
-    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, gbuffer_depth);
+    const GLenum draw_buffers[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glDrawBuffers(3, draw_buffers);
+    const bool gbuffer_complete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+    glBindRenderbuffer(GL_RENDERBUFFER, output_color);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
+    glBindFramebuffer(GL_FRAMEBUFFER, output_framebuffer);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, output_color);
+    if (!gbuffer_complete || glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw RenderContextError("OpenGL: projective texture framebuffer " + std::to_string(width) + "x" +
                                std::to_string(height) + " is incomplete");
     fb_width = width;
     fb_height = height;
+  }
+
+  // Pixels [x0, x1) x [y0, y1) of a width x height buffer (image rows = GL window rows here).
+  struct PixelRect {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  };
+
+  // The bounding box of the mesh's projected vertices (current frame) in a pinhole camera, plus a
+  // pixel; the whole buffer when a vertex is not in front of the near plane.
+  PixelRect CoveredRect(const Eigen::Matrix4d& cam_from_world, const Eigen::Matrix3d& K, int width, int height) const {
+    const Eigen::Matrix<double, 3, 4> pixel_from_world = K * cam_from_world.topRows<3>();
+    double min_x = 1e30, min_y = 1e30, max_x = -1e30, max_y = -1e30;
+    for (int v = 0; v < num_vertices; ++v) {
+      const Eigen::Vector3d X(scratch[3 * v], scratch[3 * v + 1], scratch[3 * v + 2]);
+      const Eigen::Vector3d p = pixel_from_world * X.homogeneous();
+      if (!(p.z() > renderer_options.near_m)) return PixelRect{0, 0, width, height};
+      const double x = p.x() / p.z(), y = p.y() / p.z();
+      min_x = std::min(min_x, x);
+      max_x = std::max(max_x, x);
+      min_y = std::min(min_y, y);
+      max_y = std::max(max_y, y);
+    }
+    PixelRect rect;
+    if (num_vertices == 0 || max_x < -1.0 || max_y < -1.0 || min_x > width || min_y > height) return rect;
+    rect.x0 = std::max(0, static_cast<int>(std::floor(std::max(min_x, -1.0))) - 1);
+    rect.y0 = std::max(0, static_cast<int>(std::floor(std::max(min_y, -1.0))) - 1);
+    rect.x1 = std::min(width, static_cast<int>(std::ceil(std::min(max_x, width + 1.0))) + 2);
+    rect.y1 = std::min(height, static_cast<int>(std::ceil(std::min(max_y, height + 1.0))) + 2);
+    return rect;
   }
 
   // The undistortion map of a distorted view (cached per camera).
@@ -621,41 +907,56 @@ struct ProjectiveTexturer::Impl {
       height = map->height;
     }
     EnsureFramebuffer(width, height);
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
     glViewport(0, 0, width, height);
-    // Cleared to transparent black, so that the distortion remap below interpolates
-    // premultiplied colour; the background colour is composited afterwards.
-    const GLfloat transparent[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-    glClearBufferfv(GL_COLOR, 0, transparent);
+    const Eigen::Matrix4d cam_from_world = CamFromWorld(view);
+    // Both passes (and the clears) only touch the pixels the mesh can cover.
+    const PixelRect rect = CoveredRect(cam_from_world, K, width, height);
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(rect.x0, rect.y0, rect.x1 - rect.x0, rect.y1 - rect.y0);
+
+    // Pass 1: the mesh into the G-buffer (cleared to w = 0: not covered).
+    glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_framebuffer);
+    const GLfloat zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    for (int k = 0; k < 3; ++k) glClearBufferfv(GL_COLOR, k, zero);
     const GLfloat far_depth = 1.0f;
     glClearBufferfv(GL_DEPTH, 0, &far_depth);
     render_internal::SetMeshRasterState(options.cull_back_faces, GL_LEQUAL);
-
-    const Eigen::Matrix4d cam_from_world = CamFromWorld(view);
     const Eigen::Matrix4f clip_from_world =
         (ClipFromCamera(K, width, height, renderer_options.near_m, renderer_options.far_m) * cam_from_world)
             .cast<float>();
-    glUseProgram(program);
+    const Eigen::Vector3f view_center = view.center_in_world().cast<float>();
+    glUseProgram(gbuffer_program);
+    glUniformMatrix4fv(glGetUniformLocation(gbuffer_program, "clip_from_world"), 1, GL_FALSE, clip_from_world.data());
+    glUniform3fv(glGetUniformLocation(gbuffer_program, "view_center"), 1, view_center.data());
+    glUniform1i(glGetUniformLocation(gbuffer_program, "use_vertex_colors"), has_colors ? 1 : 0);
+    const Eigen::Vector3f fallback = options.fallback_color.cast<float>();
+    glUniform3fv(glGetUniformLocation(gbuffer_program, "fallback"), 1, fallback.data());
     glBindVertexArray(vertex_array);
-    glUniformMatrix4fv(glGetUniformLocation(program, "clip_from_world"), 1, GL_FALSE, clip_from_world.data());
-    SetCameraUniforms(view);
-    if (options.depth_prepass) {
-      // Depth only; the expensive shader then runs once per visible pixel.
-      glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-      glUniform1i(glGetUniformLocation(program, "num_cameras"), 0);
-      glDrawElements(GL_TRIANGLES, num_faces * 3, GL_UNSIGNED_INT, nullptr);
-      glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-      glDepthMask(GL_FALSE);
-    }
-    glUniform1i(glGetUniformLocation(program, "num_cameras"), static_cast<int>(cameras.size()));
     glDrawElements(GL_TRIANGLES, num_faces * 3, GL_UNSIGNED_INT, nullptr);
-    glDepthMask(GL_TRUE);
     glDisable(GL_CULL_FACE);
+    glDisable(GL_DEPTH_TEST);
+
+    // Pass 2: blending, once per covered pixel. Cleared to transparent black, so that the
+    // distortion remap below interpolates premultiplied colour; the background colour is
+    // composited afterwards.
+    glBindFramebuffer(GL_FRAMEBUFFER, output_framebuffer);
+    glClearBufferfv(GL_COLOR, 0, zero);
+    glUseProgram(blend_program);
+    SetCameraUniforms(view);
+    glBindVertexArray(empty_vertex_array);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
     glBindVertexArray(0);
 
-    readback.resize(static_cast<std::size_t>(width) * height * 4);
+    glDisable(GL_SCISSOR_TEST);
+
+    readback.assign(static_cast<std::size_t>(width) * height * 4, 0);
     glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, readback.data());
+    if (rect.x1 > rect.x0 && rect.y1 > rect.y0) {
+      glPixelStorei(GL_PACK_ROW_LENGTH, width);
+      glReadPixels(rect.x0, rect.y0, rect.x1 - rect.x0, rect.y1 - rect.y0, GL_RGBA, GL_UNSIGNED_BYTE,
+                   readback.data() + 4 * (static_cast<std::size_t>(rect.y0) * width + rect.x0));
+      glPixelStorei(GL_PACK_ROW_LENGTH, 0);
+    }
     CheckGl("rendering view " + view.name);
 
     RenderResult result;
@@ -694,7 +995,8 @@ struct ProjectiveTexturer::Impl {
     const int n = static_cast<int>(cameras.size());
     std::vector<float> rotation(9 * std::max(n, 1)), translation(3 * std::max(n, 1)), intrinsics(4 * std::max(n, 1)),
         skew(std::max(n, 1)), dist(4 * std::max(n, 1)), k3(std::max(n, 1)), size(2 * std::max(n, 1)),
-        center(3 * std::max(n, 1)), gain(3 * std::max(n, 1));
+        center(3 * std::max(n, 1)), gain(3 * std::max(n, 1)), vis_scale(2 * std::max(n, 1)),
+        vis_size(2 * std::max(n, 1));
     for (int i = 0; i < n; ++i) {
       const Camera& camera = cameras[i];
       for (int r = 0; r < 3; ++r)
@@ -714,8 +1016,14 @@ struct ProjectiveTexturer::Impl {
       k3[i] = static_cast<float>(camera.dist[4]);
       size[2 * i] = static_cast<float>(camera.width);
       size[2 * i + 1] = static_cast<float>(camera.height);
+      vis_size[2 * i] = static_cast<float>(vis_cameras[i].width);
+      vis_size[2 * i + 1] = static_cast<float>(vis_cameras[i].height);
+      vis_scale[2 * i] = vis_size[2 * i] / size[2 * i];
+      vis_scale[2 * i + 1] = vis_size[2 * i + 1] / size[2 * i + 1];
     }
+    const GLuint program = blend_program;
     auto loc = [&](const char* name) { return glGetUniformLocation(program, name); };
+    glUniform1i(loc("num_cameras"), n);
     if (n > 0) {
       glUniformMatrix3fv(loc("cam_rotation"), n, GL_FALSE, rotation.data());
       glUniform3fv(loc("cam_translation"), n, translation.data());
@@ -726,16 +1034,22 @@ struct ProjectiveTexturer::Impl {
       glUniform2fv(loc("cam_size"), n, size.data());
       glUniform3fv(loc("cam_center"), n, center.data());
       glUniform3fv(loc("cam_gain"), n, gain.data());
+      glUniform2fv(loc("vis_scale"), n, vis_scale.data());
+      glUniform2fv(loc("vis_size"), n, vis_size.data());
     }
-    glUniform2f(loc("atlas_size"), static_cast<float>(atlas_width), static_cast<float>(atlas_height));
+    glUniform2f(loc("image_atlas_size"), static_cast<float>(image_atlas.width), static_cast<float>(image_atlas.height));
+    glUniform2f(loc("depth_atlas_size"), static_cast<float>(depth_atlas.width), static_cast<float>(depth_atlas.height));
     const Eigen::Vector3f view_center = view.center_in_world().cast<float>();
     glUniform3fv(loc("view_center"), 1, view_center.data());
     glUniform1f(loc("depth_bias"), static_cast<float>(options.depth_bias_m));
     glUniform1f(loc("resolution_weight"), static_cast<float>(options.resolution_weight));
     glUniform1f(loc("grazing_cos"), static_cast<float>(options.grazing_cos));
-    glUniform1i(loc("use_vertex_colors"), has_colors ? 1 : 0);
-    const Eigen::Vector3f fallback = options.fallback_color.cast<float>();
-    glUniform3fv(loc("fallback"), 1, fallback.data());
+    const char* gbuffer_names[3] = {"g_position", "g_normal", "g_base"};
+    for (int k = 0; k < 3; ++k) {
+      glActiveTexture(GL_TEXTURE2 + k);
+      glBindTexture(GL_TEXTURE_2D, gbuffer_textures[k]);
+      glUniform1i(loc(gbuffer_names[k]), 2 + k);
+    }
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, image_array);
     glUniform1i(loc("images"), 0);

@@ -18,6 +18,8 @@ namespace confluent {
 namespace {
 
 using render_internal::CamFromWorld;
+using render_internal::CheckFaceIndices;
+using render_internal::CheckVertices;
 using render_internal::ClipFromCamera;
 using render_internal::LinkProgram;
 
@@ -95,13 +97,6 @@ void main() {
 }
 )";
 
-// Full-screen triangle for the distortion remap.
-constexpr const char* kRemapVertexShader = R"(#version 430 core
-void main() {
-  vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
-  gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
-}
-)";
 
 // Each output (distorted) pixel reads its position in the ideal buffer from `ideal_from_pixel`
 // (RG32F, buffer coordinates with sample centres at integers) and interpolates the coverage
@@ -268,16 +263,6 @@ RowMatrixX3d VertexNormals(const RowMatrixX3d& vertices, const RowMatrixX3i& fac
   return normals;
 }
 
-void CheckVertices(const RowMatrixX3d& vertices, const std::string& name) {
-  for (int v = 0; v < vertices.rows(); ++v)
-    if (!vertices.row(v).allFinite()) {
-      std::ostringstream out;
-      out << "vertex " << v << " has a non-finite coordinate (" << vertices(v, 0) << ", " << vertices(v, 1) << ", "
-          << vertices(v, 2) << ")";
-      throw InputError(name, out.str());
-    }
-}
-
 // Distortion remap of one camera: the ideal buffer's placement and the per-pixel map.
 struct DistortionMap {
   int width = 0, height = 0;
@@ -336,7 +321,7 @@ struct MeshRenderer::Impl {
     color_program = LinkProgram(kMeshVertexShader, std::string("#version 430 core\n#define WITH_COLOR\n") +
                                                        kMeshFragmentShader, "mesh");
     geometry_program = LinkProgram(kMeshVertexShader, std::string("#version 430 core\n") + kMeshFragmentShader, "mesh");
-    remap_program = LinkProgram(kRemapVertexShader, kRemapFragmentShader, "distortion remap");
+    remap_program = LinkProgram(render_internal::kFullScreenTriangleVertexShader, kRemapFragmentShader, "distortion remap");
     glGenVertexArrays(1, &empty_vertex_array);
     GLint max_texture = 0, max_viewport[2] = {0, 0}, max_renderbuffer = 0;
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
@@ -444,14 +429,7 @@ struct MeshRenderer::Impl {
   int AddMesh(const Mesh& mesh, const std::string& name, const Image& texture_image) {
     const int n = mesh.num_vertices();
     CheckVertices(mesh.vertices, name);
-    for (int f = 0; f < mesh.num_faces(); ++f)
-      for (int k = 0; k < 3; ++k)
-        if (mesh.faces(f, k) < 0 || mesh.faces(f, k) >= n) {
-          std::ostringstream out;
-          out << "face " << f << " refers to vertex " << mesh.faces(f, k) << ", but the mesh has " << n
-              << " vertices";
-          throw InputError(name, out.str());
-        }
+    CheckFaceIndices(mesh, name);
     if (mesh.colors.rows() != 0 && mesh.colors.rows() != n)
       throw InputError(name, "has " + std::to_string(mesh.colors.rows()) + " vertex colours for " +
                                  std::to_string(n) + " vertices");

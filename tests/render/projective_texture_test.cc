@@ -210,6 +210,61 @@ TEST(ProjectiveTexturer, DistortedCamerasOnBothSides) {
   EXPECT_GT(MaskedPsnr(expected.color, rendered.color, mask), 28.0);
 }
 
+TEST(ProjectiveTexturer, ViewsThatCropTheMeshOrHaveItBehindThem) {
+  // The blending pass only runs inside the mesh's projected bounding box; close views crop the
+  // box at the image border, and a view with mesh vertices behind it uses the whole image.
+  const Mesh real = ColouredSphere();
+  GroundTruth truth(real);
+  const std::vector<Camera> ring = Ring(8);
+  std::vector<Image> masks;
+  const std::vector<Image> images = ImagesOf(&truth, ring, &masks);
+  ProjectiveTexturer texturer(real);
+  texturer.SetFrame(real.vertices, ring, images, masks);
+  const Eigen::Vector3d eye = kCentre + Eigen::Vector3d(0.75, 0.0, 0.1);
+  for (const Camera& view :
+       {LookAtCamera("close", eye, kCentre, 160, 120, 170),
+        LookAtCamera("off_centre", eye, kCentre + Eigen::Vector3d(0, 0.6, 0), 160, 120, 170),
+        LookAtCamera("sideways", eye, eye + Eigen::Vector3d(-0.4, 1.0, 0.0), 160, 120, 80)}) {
+    const RenderResult expected = truth.Render(view);
+    const RenderResult rendered = texturer.Render(view, /*want_silhouette=*/true);
+    int differing = 0, covered = 0;
+    for (std::size_t p = 0; p < rendered.silhouette.data.size(); ++p) {
+      differing += rendered.silhouette.data[p] != expected.silhouette.data[p];
+      covered += expected.silhouette.data[p] != 0;
+    }
+    ASSERT_GT(covered, 500) << view.name;
+    EXPECT_LE(differing, covered / 100) << view.name;
+    const Image mask = UnionMask(expected.silhouette, rendered.silhouette);
+    EXPECT_GT(MaskedPsnr(expected.color, rendered.color, mask), 30.0) << view.name;
+  }
+}
+
+TEST(ProjectiveTexturer, HalfResolutionVisibilityStaysClose) {
+  const Mesh real = ColouredSphere();
+  GroundTruth truth(real);
+  const std::vector<Camera> ring = Ring(8);
+  std::vector<Image> masks;
+  const std::vector<Image> images = ImagesOf(&truth, ring, &masks);
+  ProjectiveTextureOptions options;
+  options.visibility_scale = 0.5;
+  ProjectiveTexturer half(real, options), full(real);
+  half.SetFrame(real.vertices, ring, images, masks);
+  full.SetFrame(real.vertices, ring, images, masks);
+  // Depth maps at a quarter of the pixels see a quarter of the covered pixels.
+  for (std::size_t i = 0; i < ring.size(); ++i)
+    EXPECT_NEAR(half.frame_info().visible_pixels[i], full.frame_info().visible_pixels[i] / 4.0,
+                0.05 * full.frame_info().visible_pixels[i] / 4.0);
+  const Camera heldout = RingCamera("heldout", 22.5, 2.0);
+  const RenderResult expected = truth.Render(heldout);
+  const RenderResult rendered = half.Render(heldout, true);
+  const Image mask = UnionMask(expected.silhouette, rendered.silhouette);
+  EXPECT_GT(MaskedPsnr(expected.color, rendered.color, mask), 32.0);
+  options.visibility_scale = 0.0;
+  EXPECT_THROW(options.Check(), UsageError);
+  options.visibility_scale = 1.5;
+  EXPECT_THROW(options.Check(), UsageError);
+}
+
 TEST(ProjectiveTexturer, BadInputThrows) {
   const Mesh grey = FlatSphere(0.5f, 0.5f, 0.5f);
   ProjectiveTexturer texturer(grey);
