@@ -259,7 +259,7 @@ Image DrawWorldOverlay(const Camera& camera, const Image& image, double grid_hal
   // The distortion polynomial is only valid inside the field of view: points whose ideal
   // projection lies well outside the image are not drawn (they would curl back into it).
   double max_radius = 0;
-  for (const Eigen::Vector2d corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(camera.width, 0),
+  for (const Eigen::Vector2d& corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(camera.width, 0),
                                        Eigen::Vector2d(0, camera.height), Eigen::Vector2d(camera.width, camera.height)})
     max_radius = std::max(max_radius, camera.Undistort((camera.K.inverse() * corner.homogeneous()).head<2>()).norm());
   auto project = [&](const Eigen::Vector3d& point, Eigen::Vector2d* pixel) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <Eigen/Geometry>
@@ -51,10 +52,14 @@ TEST(Checkerboard, BoardPointsAndSizeParsing) {
 
 // Detected corners must match the exact projections to a small fraction of a pixel, in the
 // documented order: exactly for an asymmetric board (colour decides), up to the half turn for a
-// symmetric one.
+// symmetric one. The X-junction model fit must also beat cv::cornerSubPix alone clearly.
 TEST(Checkerboard, DetectsRenderedBoardWithSubpixelAccuracyInCanonicalOrder) {
   Rig rig = MakeRingRig(1, 2.0, 1.2, Eigen::Vector3d(0, 0, 1.0), 640, 480, 520.0, TestDistortion());
   const Camera& camera = rig.cameras[0];
+  CheckerboardDetectOptions subpix_only;
+  subpix_only.model_refinement = false;
+  double sum_squared = 0.0, sum_squared_subpix = 0.0, worst = 0.0;
+  int corners_compared = 0;
   for (const CheckerboardSpec& board : {CheckerboardSpec{9, 6, 0.08}, CheckerboardSpec{8, 6, 0.08}}) {
     const auto poses = MakeBoardPoses(30, board, 0.5, 0.8, 1.4, 30.0, 180.0, 7);
     int visible = 0, detected = 0;
@@ -64,7 +69,7 @@ TEST(Checkerboard, DetectsRenderedBoardWithSubpixelAccuracyInCanonicalOrder) {
       SyntheticBoardOptions render;
       render.seed = static_cast<std::uint32_t>(p + 1);
       const Image image = RenderCheckerboard(camera, board, poses[p], render);
-      std::vector<Eigen::Vector2d> corners;
+      std::vector<Eigen::Vector2d> corners, subpix;
       if (!DetectCheckerboard(image, board, {}, &corners)) continue;
       ++detected;
       const auto truth = ProjectCheckerboard(camera, board, poses[p]);
@@ -72,12 +77,24 @@ TEST(Checkerboard, DetectsRenderedBoardWithSubpixelAccuracyInCanonicalOrder) {
       HalfTurnCorners(&turned);
       const bool use_turned = board.half_turn_symmetric() && RmsCornerError(turned, truth) < RmsCornerError(corners, truth);
       const auto& best = use_turned ? turned : corners;
-      EXPECT_LT(RmsCornerError(best, truth), 0.15) << board.cols << "x" << board.rows << " pose " << p;
-      EXPECT_LT(MaxCornerError(best, truth), 0.3) << board.cols << "x" << board.rows << " pose " << p;
+      EXPECT_LT(RmsCornerError(best, truth), 0.05) << board.cols << "x" << board.rows << " pose " << p;
+      EXPECT_LT(MaxCornerError(best, truth), 0.15) << board.cols << "x" << board.rows << " pose " << p;
+      worst = std::max(worst, MaxCornerError(best, truth));
+      sum_squared += std::pow(RmsCornerError(best, truth), 2) * truth.size();
+      corners_compared += static_cast<int>(truth.size());
+      ASSERT_TRUE(DetectCheckerboard(image, board, subpix_only, &subpix));
+      if (use_turned) HalfTurnCorners(&subpix);
+      sum_squared_subpix += std::pow(RmsCornerError(subpix, truth), 2) * truth.size();
     }
     EXPECT_GE(visible, 4) << board.cols << "x" << board.rows;
     EXPECT_GE(detected, visible * 8 / 10) << board.cols << "x" << board.rows;
   }
+  const double rms = std::sqrt(sum_squared / corners_compared);
+  const double rms_subpix = std::sqrt(sum_squared_subpix / corners_compared);
+  std::printf("corner error over %d corners: model fit rms %.4f px (max %.4f), cornerSubPix alone rms %.4f px\n",
+              corners_compared, rms, worst, rms_subpix);
+  EXPECT_LT(rms, 0.03);
+  EXPECT_LT(rms, 0.5 * rms_subpix);
   std::vector<Eigen::Vector2d> corners;
   EXPECT_FALSE(DetectCheckerboard(Image(320, 240, 1), CheckerboardSpec{}, {}, &corners));
 }
@@ -128,8 +145,8 @@ SyntheticRing MakeSyntheticRing(int num_poses) {
 }
 
 TEST(Calibrate, SyntheticRingOfEightAccuracy) {
-  const SyntheticRing ring = MakeSyntheticRing(80);
-  for (const auto& views : ring.views) EXPECT_GE(views.views.size(), 12u) << views.name;
+  const SyntheticRing ring = MakeSyntheticRing(50);
+  for (const auto& views : ring.views) EXPECT_GE(views.views.size(), 8u) << views.name;
 
   CalibrateOptions options;
   CalibrationSummary summary;
@@ -148,6 +165,7 @@ TEST(Calibrate, SyntheticRingOfEightAccuracy) {
     true_centres.col(c) = ring.truth.cameras[c].center_in_world();
   }
   Eigen::Isometry3d world_from_got(Eigen::umeyama(got_centres, true_centres, false));
+  double max_focal = 0.0, max_centre_mm = 0.0, max_angle_deg = 0.0, sum_angle_deg = 0.0;
   for (int c = 0; c < 8; ++c) {
     const Camera& truth = ring.truth.cameras[c];
     const Camera& got = rig.cameras[c];
@@ -162,13 +180,21 @@ TEST(Calibrate, SyntheticRingOfEightAccuracy) {
     EXPECT_LT(centre_error_mm, 2.0) << truth.name;
     const Eigen::Matrix3d got_rotation = got.rotation * world_from_got.linear().transpose();  // cam_from_true_world
     const double angle_deg = Eigen::AngleAxisd(got_rotation * truth.rotation.transpose()).angle() * 180.0 / M_PI;
-    // The target is 0.05 deg; measured 0.01-0.08 deg (limited by a ~0.05 px systematic
-    // corner error, which the principal points absorb). Asserted at the level achieved.
-    EXPECT_LT(angle_deg, 0.1) << truth.name;
+    // The target. (With cv::cornerSubPix alone the corners carried ~0.06 px of
+    // position-dependent error and rotations were off by up to 0.09 deg; the X-junction model
+    // fit of DetectCheckerboard brings both down by an order of magnitude.)
+    EXPECT_LT(angle_deg, 0.05) << truth.name;
     std::printf("%s views %d/%d rms %.4f px  fx %.4f%%  fy %.4f%%  centre %.3f mm  rotation %.4f deg\n",
                 truth.name.c_str(), report.views_in_adjustment, report.views_detected, report.final_rms_px,
                 100 * fx_error, 100 * fy_error, centre_error_mm, angle_deg);
+    max_focal = std::max({max_focal, fx_error, fy_error});
+    max_centre_mm = std::max(max_centre_mm, centre_error_mm);
+    max_angle_deg = std::max(max_angle_deg, angle_deg);
+    sum_angle_deg += angle_deg;
   }
+  std::printf("joint rms %.4f px; max focal error %.4f%%, max centre error %.3f mm, rotation error max %.4f mean "
+              "%.4f deg\n",
+              summary.final_rms_px, 100 * max_focal, max_centre_mm, max_angle_deg, sum_angle_deg / 8);
 }
 
 TEST(Calibrate, BoardWorldFrameAndUnplacedCamera) {

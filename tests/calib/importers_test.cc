@@ -405,6 +405,55 @@ TEST(OpenCvXmlImportTest, FolderOfCameraFolders) {
   EXPECT_EQ(single.cameras[0].name, "cam1");
 }
 
+// The convention of rvec/tvec, checked against OpenCV itself rather than against our writer:
+// a checkerboard (corners in mm, lying on the floor) is seen by a camera 2 m above the floor;
+// cv::solvePnP on its pixels gives rvec/tvec exactly as a third-party OpenCV calibration
+// (utrecht_4cam config.xml) stores them. The import must reproduce the pixels of the board
+// corners given in metres, and, since the board's z axis (x cross y, rows across the floor)
+// points into the floor, place the camera at z = -2 m; with up axis -z it is at z = +2 m.
+TEST(OpenCvXmlImportTest, RvecTvecFromSolvePnpAreWorldToCameraInMillimetres) {
+  TempDir dir;
+  Camera camera = LookAtCamera("cam1", Eigen::Vector3d(2.5, -1.0, 2.0), Eigen::Vector3d(0.4, 0.3, 0.0), 644, 486, 490.0);
+  camera.dist << -0.3, 0.15, 0.001, -0.0005, -0.05;
+  // Board on the floor: x along the rows, y across them; corner (i, j) at (i, j) * 115 mm.
+  // Board frame = world frame of the file, with z = x cross y = down.
+  const Eigen::Matrix3d board_in_zup = Eigen::Vector3d(1, -1, -1).asDiagonal();  // board axes in a z-up world
+  std::vector<cv::Point3d> corners_mm;
+  std::vector<cv::Point2d> pixels;
+  for (int j = 0; j < 6; ++j)
+    for (int i = 0; i < 8; ++i) {
+      const Eigen::Vector3d in_board(i * 115.0, j * 115.0, 0.0);
+      corners_mm.emplace_back(in_board.x(), in_board.y(), in_board.z());
+      const Eigen::Vector2d pixel = camera.Project(board_in_zup * in_board / 1000.0);
+      pixels.emplace_back(pixel.x(), pixel.y());
+    }
+  cv::Mat K(3, 3, CV_64F), dist(1, 5, CV_64F), rvec, tvec;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) K.at<double>(r, c) = camera.K(r, c);
+  for (int i = 0; i < 5; ++i) dist.at<double>(i) = camera.dist[i];
+  ASSERT_TRUE(cv::solvePnP(corners_mm, pixels, K, dist, rvec, tvec, false, cv::SOLVEPNP_ITERATIVE));
+  {
+    std::filesystem::create_directories(dir / "cam1");
+    cv::FileStorage storage(dir / "cam1/config.xml", cv::FileStorage::WRITE);
+    storage << "CameraMatrix" << K << "DistortionCoeffs" << dist << "Rotation" << rvec << "Translation" << tvec
+            << "image_width" << 644 << "image_height" << 486;
+  }
+  const Rig imported = ImportCalibration(CalibFormat::kOpenCvXml, dir.path());
+  ASSERT_EQ(imported.size(), 1);
+  double worst_px = 0.0;
+  for (std::size_t k = 0; k < corners_mm.size(); ++k) {
+    const Eigen::Vector3d corner_m(corners_mm[k].x / 1000.0, corners_mm[k].y / 1000.0, corners_mm[k].z / 1000.0);
+    worst_px = std::max(worst_px, (imported.cameras[0].Project(corner_m) - Eigen::Vector2d(pixels[k].x, pixels[k].y)).norm());
+  }
+  EXPECT_LT(worst_px, 1e-4);
+  EXPECT_NEAR(imported.cameras[0].center_in_world().z(), -2.0, 1e-4);  // board z points into the floor
+  ImportOptions z_up;
+  z_up.up_axis = "-z";
+  const Rig upright = ImportCalibration(CalibFormat::kOpenCvXml, dir.path(), z_up);
+  EXPECT_LT((upright.cameras[0].center_in_world() - Eigen::Vector3d(2.5, -1.0, 2.0)).norm(), 1e-4);
+  EXPECT_LT(MaxProjectionDifference(Rig{{camera}}, upright), 1e-4);
+}
+
 TEST(OpenCvXmlImportTest, UnknownSizeAndLongDistortionAreErrors) {
   TempDir dir;
   Camera camera = GroundTruthRig(1).cameras[0];
