@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "core/error.h"
+#include "core/mesh_validation.h"
 #include "deform/cholmod_solver.h"
 #include "deform/laplacian.h"
 #include "tracking/overlap.h"
@@ -22,9 +23,28 @@ void SilhouetteRefinementOptions::Check() const {
 namespace {
 
 bool Inside(const Image& mask, const Eigen::Vector2d& pixel) {
-  const long x = std::lround(pixel.x()), y = std::lround(pixel.y());
-  if (x < 0 || y < 0 || x >= mask.width || y >= mask.height) return false;
+  if (!(pixel.x() >= -0.5 && pixel.y() >= -0.5)) return false;
+  const int x = static_cast<int>(pixel.x() + 0.5), y = static_cast<int>(pixel.y() + 0.5);  // nearest pixel
+  if (x >= mask.width || y >= mask.height) return false;
   return mask.data[static_cast<std::size_t>(y) * mask.width + x] > 127;
+}
+
+// The triangles of a closed mesh that face `camera` (or all that face away, for a mesh oriented
+// inwards): their silhouette is the whole mesh's, at half the rasterisation cost.
+Mesh FacingPart(const Mesh& mesh, const Camera& camera) {
+  const Eigen::Vector3d centre = camera.center_in_world();
+  Mesh part;
+  part.vertices = mesh.vertices;
+  std::vector<int> kept;
+  kept.reserve(mesh.num_faces());
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.faces(f, 0)), b = mesh.vertices.row(mesh.faces(f, 1)),
+                          c = mesh.vertices.row(mesh.faces(f, 2));
+    if ((b - a).cross(c - a).dot(a - centre) <= 0.0) kept.push_back(f);
+  }
+  part.faces.resize(static_cast<int>(kept.size()), 3);
+  for (std::size_t i = 0; i < kept.size(); ++i) part.faces.row(static_cast<int>(i)) = mesh.faces.row(kept[i]);
+  return part;
 }
 
 double Iou(const Image& a, const Image& b) {
@@ -59,6 +79,7 @@ struct SilhouetteRefiner::Impl {
   RowMatrixX3i faces;
   double gamma = 0.0;     // absolute diffusion stiffness
   SparseCholesky spread;  // L + gamma I
+  bool closed = false;    // no boundary edges: the facing triangles give the silhouette
 
   // Sums, per vertex, the 3D steps that bring it onto `mask`'s edge where it lies on the outline
   // of `mesh` in `camera` (`own` is that outline's silhouette).
@@ -81,16 +102,16 @@ struct SilhouetteRefiner::Impl {
       if (Inside(own, pixel + 2.0 * outward) && !Inside(own, pixel - 2.0 * outward)) outward = -outward;
       // The edges (inside, then outside, going outwards) of the mask and of the scan's own
       // silhouette nearest to the vertex, found alike so that their sampling biases cancel.
-      auto nearest_edge = [&](const Image& image) {
-        double best = reach + 1.0;
-        for (double t = -reach; t <= reach; t += half)
-          if (std::abs(t + 0.5 * half) < std::abs(best) && Inside(image, pixel + t * outward) &&
-              !Inside(image, pixel + (t + half) * outward))
-            best = t + 0.5 * half;
-        return best;
+      auto nearest_edge = [&](const Image& image, double limit) {
+        for (double d = 0.0; d <= limit; d += half)  // t = d and t = -d - half are equally near
+          for (const double t : {d, -d - half})
+            if (Inside(image, pixel + t * outward) && !Inside(image, pixel + (t + half) * outward)) return t + 0.5 * half;
+        return limit + 1.0;
       };
-      const double own_edge = nearest_edge(own), mask_edge = nearest_edge(mask);
-      if (std::abs(own_edge) > 1.5 || std::abs(mask_edge) > reach) continue;
+      const double own_edge = nearest_edge(own, 1.5);
+      if (std::abs(own_edge) > 1.5) continue;
+      const double mask_edge = nearest_edge(mask, reach);
+      if (std::abs(mask_edge) > reach) continue;
       const double best = mask_edge - own_edge;
       // The same pixel shift at the vertex's depth, perpendicular to its ray.
       const Eigen::Vector3d in_camera = camera.rotation * point + camera.translation;
@@ -107,6 +128,7 @@ SilhouetteRefiner::SilhouetteRefiner(const Mesh& scan, const SilhouetteRefinemen
   options.Check();
   impl_->options = options;
   impl_->faces = scan.faces;
+  impl_->closed = ValidateMesh(scan).is_watertight();
   if (scan.num_faces() == 0) throw InputError("scan", "silhouette refinement: the scan has no faces");
   const Eigen::SparseMatrix<double> laplacian = CotanLaplacian(scan.vertices, scan.faces);
   impl_->gamma = options.spread_stiffness * laplacian.diagonal().mean();
@@ -142,6 +164,7 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
   mesh.faces = s.faces;
   if (!vertices.allFinite()) throw std::invalid_argument("Refine: non-finite vertices");
   const RowMatrixX3d start = vertices;
+  const bool closed = s.closed;
   const int threads = std::max(1, std::min<int>(s.options.threads, static_cast<int>(usable.size())));
   for (int round = 0; round < s.options.iterations && !usable.empty(); ++round) {
     const RowMatrixX3d normals = VertexNormals(mesh.vertices, mesh.faces);
@@ -150,7 +173,7 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
     auto work = [&](int part) {
       for (std::size_t i = part; i < usable.size(); i += threads) {
         const int c = usable[i];
-        const Image own = RasterizeSilhouette(mesh, cameras[c]);
+        const Image own = RasterizeSilhouette(closed ? FacingPart(mesh, cameras[c]) : mesh, cameras[c]);
         if (round == 0) summary.iou_before[c] = Iou(own, masks[c]);
         s.RimSteps(mesh, normals, cameras[c], own, masks[c], &step_sums[part], &counts[part]);
       }
@@ -177,7 +200,8 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
       if (step.allFinite()) mesh.vertices.row(v) += step;
     }
   }
-  for (int c : usable) summary.iou_after[c] = Iou(RasterizeSilhouette(mesh, cameras[c]), masks[c]);
+  for (int c : usable)
+    summary.iou_after[c] = Iou(RasterizeSilhouette(closed ? FacingPart(mesh, cameras[c]) : mesh, cameras[c]), masks[c]);
   const Eigen::VectorXd shift = (mesh.vertices - start).rowwise().norm();
   summary.mean_shift_m = n ? shift.mean() : 0.0;
   summary.max_shift_m = n ? shift.maxCoeff() : 0.0;

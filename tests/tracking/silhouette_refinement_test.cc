@@ -12,20 +12,10 @@
 namespace confluent {
 namespace {
 
-// A camera on a ring of radius 3 m at height `height_m`, looking at the origin (Z up).
+// A 320x240 camera on a ring of radius 3 m at height `height_m`, looking at the origin.
 Camera RingCamera(double azimuth_rad, double height_m) {
-  Camera camera;
-  camera.name = "ring";
-  camera.width = 320;
-  camera.height = 240;
-  camera.K << 320, 0, 159.5, 0, 320, 119.5, 0, 0, 1;
   const Eigen::Vector3d centre(3.0 * std::cos(azimuth_rad), 3.0 * std::sin(azimuth_rad), height_m);
-  const Eigen::Vector3d z = (-centre).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  camera.rotation << x.transpose(), y.transpose(), z.transpose();
-  camera.translation = -camera.rotation * centre;
-  return camera;
+  return LookAtCamera("ring", centre, Eigen::Vector3d::Zero(), 320, 240, 320.0);
 }
 
 double Iou(const Image& a, const Image& b) {
