@@ -141,6 +141,9 @@ int RunRun(const ParsedArgs& args, const Context& context) {
   if (!inputs.correspondences_path.empty() && !fs::exists(inputs.correspondences_path))
     throw InputError(inputs.correspondences_path, "correspondences file not found");
   inputs.refine_silhouettes = !args.has("no-refine");
+  inputs.refine_iterations = args.get_int("refine-iterations", inputs.refine_iterations);
+  if (inputs.refine_iterations < 1 || inputs.refine_iterations > 50)
+    throw UsageError("--refine-iterations: must be within [1, 50]");
   inputs.threads = args.get_int("threads", 2);
   if (inputs.threads < 1 || inputs.threads > 64) throw UsageError("--threads: must be within [1, 64]");
   RenderStageOptions render;
@@ -203,6 +206,7 @@ CommandSpec MakeRunCommand() {
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
       {"masks", "DIR", "use these masks DIR/<cam>/<frame>.png instead of extracting silhouettes"},
       {"no-refine", "", "keep the deformed scan as Confluent Motion gives it (no silhouette refinement)"},
+      {"refine-iterations", "N", "rounds of silhouette refinement per frame (default 6)"},
       {"no-render", "", "skip the 3D-video render stage"},
       {"render-width", "PX", "width of the orbit video (default 960)"},
       {"render-height", "PX", "height of the orbit video (default 720)"},

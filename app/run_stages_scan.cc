@@ -98,6 +98,7 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     const double refine_start = NowSeconds();
     SilhouetteRefinementOptions refine_options;
     refine_options.threads = inputs.threads;
+    refine_options.iterations = inputs.refine_iterations;
     refiner = std::make_unique<SilhouetteRefiner>(scan, refine_options);
     timings->Add("refine_factor", -1, NowSeconds() - refine_start);
     const Rig& rig = inputs.capture->rig();

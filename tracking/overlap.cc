@@ -1,6 +1,7 @@
 #include "tracking/overlap.h"
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 
 #include "calib/capture.h"
@@ -31,6 +32,39 @@ Image RasterizeSilhouette(const Mesh& mesh, const Camera& camera, int downscale)
     if (!valid[a] || !valid[b] || !valid[c]) continue;
     const cv::Point triangle[3] = {projected[a], projected[b], projected[c]};
     cv::fillConvexPoly(target, triangle, 3, cv::Scalar(255), cv::LINE_8, kShift);
+  }
+  return out;
+}
+
+Image RasterizeClosedMesh(const Mesh& mesh, const Camera& camera) {
+  Image out(camera.width, camera.height, 1);
+  const int n = mesh.num_vertices();
+  std::vector<Eigen::Vector2d> pixels(n);
+  std::vector<char> valid(n, 0);
+  for (int v = 0; v < n; ++v) valid[v] = camera.ProjectChecked(mesh.vertices.row(v).transpose(), &pixels[v]);
+  const Eigen::Vector3d centre = camera.center_in_world();
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int a = mesh.faces(f, 0), b = mesh.faces(f, 1), c = mesh.faces(f, 2);
+    if (!valid[a] || !valid[b] || !valid[c]) continue;
+    const Eigen::Vector3d pa = mesh.vertices.row(a), pb = mesh.vertices.row(b), pc = mesh.vertices.row(c);
+    if ((pb - pa).cross(pc - pa).dot(pa - centre) > 0.0) continue;  // faces away
+    const Eigen::Vector2d& p0 = pixels[a];
+    const Eigen::Vector2d& p1 = pixels[b];
+    const Eigen::Vector2d& p2 = pixels[c];
+    const double area = (p1 - p0).x() * (p2 - p0).y() - (p1 - p0).y() * (p2 - p0).x();
+    if (area == 0.0 || !std::isfinite(area)) continue;
+    const int x0 = std::max(0, static_cast<int>(std::ceil(std::min({p0.x(), p1.x(), p2.x()}))));
+    const int x1 = std::min(out.width - 1, static_cast<int>(std::floor(std::max({p0.x(), p1.x(), p2.x()}))));
+    const int y0 = std::max(0, static_cast<int>(std::ceil(std::min({p0.y(), p1.y(), p2.y()}))));
+    const int y1 = std::min(out.height - 1, static_cast<int>(std::floor(std::max({p0.y(), p1.y(), p2.y()}))));
+    const double sign = area > 0.0 ? 1.0 : -1.0;
+    auto edge = [sign](const Eigen::Vector2d& from, const Eigen::Vector2d& to, double x, double y) {
+      return sign * ((to.x() - from.x()) * (y - from.y()) - (to.y() - from.y()) * (x - from.x()));
+    };
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x)
+        if (edge(p0, p1, x, y) >= 0.0 && edge(p1, p2, x, y) >= 0.0 && edge(p2, p0, x, y) >= 0.0)
+          out.data[static_cast<std::size_t>(y) * out.width + x] = 255;
   }
   return out;
 }

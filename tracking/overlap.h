@@ -15,6 +15,12 @@ namespace confluent {
 // camera are skipped. Distortion is respected per vertex.
 Image RasterizeSilhouette(const Mesh& mesh, const Camera& camera, int downscale = 1);
 
+// The silhouette of a closed (watertight) mesh in `camera` at full resolution, 0/255: the pixels
+// whose centres lie inside a projected triangle that faces the camera. Faster than
+// RasterizeSilhouette for dense meshes (a plain edge-function fill, half the triangles).
+// Triangles with a vertex behind the camera are skipped; distortion is respected per vertex.
+Image RasterizeClosedMesh(const Mesh& mesh, const Camera& camera);
+
 // `mask` reduced by `downscale` (area average, thresholded at 50%), 0/255.
 Image DownscaleMask(const Image& mask, int downscale);
 

@@ -29,24 +29,6 @@ bool Inside(const Image& mask, const Eigen::Vector2d& pixel) {
   return mask.data[static_cast<std::size_t>(y) * mask.width + x] > 127;
 }
 
-// The triangles of a closed mesh that face `camera` (or all that face away, for a mesh oriented
-// inwards): their silhouette is the whole mesh's, at half the rasterisation cost.
-Mesh FacingPart(const Mesh& mesh, const Camera& camera) {
-  const Eigen::Vector3d centre = camera.center_in_world();
-  Mesh part;
-  part.vertices = mesh.vertices;
-  std::vector<int> kept;
-  kept.reserve(mesh.num_faces());
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const Eigen::Vector3d a = mesh.vertices.row(mesh.faces(f, 0)), b = mesh.vertices.row(mesh.faces(f, 1)),
-                          c = mesh.vertices.row(mesh.faces(f, 2));
-    if ((b - a).cross(c - a).dot(a - centre) <= 0.0) kept.push_back(f);
-  }
-  part.faces.resize(static_cast<int>(kept.size()), 3);
-  for (std::size_t i = 0; i < kept.size(); ++i) part.faces.row(static_cast<int>(i)) = mesh.faces.row(kept[i]);
-  return part;
-}
-
 double Iou(const Image& a, const Image& b) {
   long both = 0, either = 0;
   for (std::size_t i = 0; i < a.data.size(); ++i) {
@@ -79,7 +61,7 @@ struct SilhouetteRefiner::Impl {
   RowMatrixX3i faces;
   double gamma = 0.0;     // absolute diffusion stiffness
   SparseCholesky spread;  // L + gamma I
-  bool closed = false;    // no boundary edges: the facing triangles give the silhouette
+  bool closed = false;    // watertight: the fast facing-triangle raster gives the silhouette
 
   // Sums, per vertex, the 3D steps that bring it onto `mask`'s edge where it lies on the outline
   // of `mesh` in `camera` (`own` is that outline's silhouette).
@@ -173,7 +155,7 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
     auto work = [&](int part) {
       for (std::size_t i = part; i < usable.size(); i += threads) {
         const int c = usable[i];
-        const Image own = RasterizeSilhouette(closed ? FacingPart(mesh, cameras[c]) : mesh, cameras[c]);
+        const Image own = closed ? RasterizeClosedMesh(mesh, cameras[c]) : RasterizeSilhouette(mesh, cameras[c]);
         if (round == 0) summary.iou_before[c] = Iou(own, masks[c]);
         s.RimSteps(mesh, normals, cameras[c], own, masks[c], &step_sums[part], &counts[part]);
       }
@@ -201,7 +183,7 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
     }
   }
   for (int c : usable)
-    summary.iou_after[c] = Iou(RasterizeSilhouette(closed ? FacingPart(mesh, cameras[c]) : mesh, cameras[c]), masks[c]);
+    summary.iou_after[c] = Iou(closed ? RasterizeClosedMesh(mesh, cameras[c]) : RasterizeSilhouette(mesh, cameras[c]), masks[c]);
   const Eigen::VectorXd shift = (mesh.vertices - start).rowwise().norm();
   summary.mean_shift_m = n ? shift.mean() : 0.0;
   summary.max_shift_m = n ? shift.maxCoeff() : 0.0;

@@ -38,7 +38,7 @@ TEST(SilhouetteRefinement, PullsAnOffsetShrunkSphereOntoTheSilhouettes) {
   std::vector<Image> masks;
   for (int k = 0; k < 6; ++k) {
     cameras.push_back(RingCamera(2.0 * M_PI * k / 6, k % 2 ? 0.8 : -0.4));
-    masks.push_back(RasterizeSilhouette(truth, cameras.back()));
+    masks.push_back(RasterizeClosedMesh(truth, cameras.back()));
   }
   Mesh start = truth;
   start.vertices = (0.93 * truth.vertices).rowwise() + Eigen::RowVector3d(0.03, -0.02, 0.01);
@@ -55,11 +55,26 @@ TEST(SilhouetteRefinement, PullsAnOffsetShrunkSphereOntoTheSilhouettes) {
   EXPECT_LT(SphereError(refined), 0.2 * SphereError(start.vertices));
   // A camera the refinement never saw agrees better too.
   const Camera unseen = RingCamera(0.5, 1.6);
-  const Image unseen_mask = RasterizeSilhouette(truth, unseen);
+  const Image unseen_mask = RasterizeClosedMesh(truth, unseen);
   Mesh refined_mesh = start;
   refined_mesh.vertices = refined;
-  EXPECT_GT(Iou(RasterizeSilhouette(refined_mesh, unseen), unseen_mask),
-            Iou(RasterizeSilhouette(start, unseen), unseen_mask) + 0.05);
+  EXPECT_GT(Iou(RasterizeClosedMesh(refined_mesh, unseen), unseen_mask),
+            Iou(RasterizeClosedMesh(start, unseen), unseen_mask) + 0.05);
+}
+
+TEST(RasterizeClosedMesh, SphereCoversItsProjectedDisc) {
+  const Mesh sphere = MakeUvSphere(0.3, 64, 128);
+  const Camera camera = RingCamera(0.3, 0.0);  // the sphere's centre projects to the principal point
+  const Image mask = RasterizeClosedMesh(sphere, camera);
+  long covered = 0;
+  for (std::uint8_t v : mask.data) covered += v == 255;
+  // The outline of a sphere at distance d seen with focal f is a circle of radius f r / sqrt(d^2 - r^2).
+  const double radius_px = 320.0 * 0.3 / std::sqrt(9.0 - 0.09);
+  EXPECT_NEAR(covered, M_PI * radius_px * radius_px, 0.02 * M_PI * radius_px * radius_px);
+  // The centre-sampled fill lies within the conservative one.
+  const Image conservative = RasterizeSilhouette(sphere, camera);
+  for (std::size_t i = 0; i < mask.data.size(); ++i)
+    if (mask.data[i]) ASSERT_EQ(conservative.data[i], 255) << i;
 }
 
 TEST(SilhouetteRefinement, EmptyMasksAreSkippedAndWrongSizesRefused) {
