@@ -18,7 +18,7 @@ namespace confluent {
 
 // Options of SilhouetteRefiner.
 struct SilhouetteRefinementOptions {
-  int iterations = 6;          // rim search and diffusion rounds per frame
+  int iterations = 12;         // rim search and diffusion rounds per frame
   double search_px = 12.0;     // a rim vertex looks for the mask edge this far in and out
   double max_rim_cosine = 0.3;  // |normal . viewing ray| below this: a candidate rim vertex
   // Diffusion stiffness relative to the mean diagonal of the cotangent Laplacian: a rim
