@@ -59,7 +59,9 @@ struct Row {
   double vertex_error_m = NAN;  // scan vs ground-truth mesh (once per frame; repeated per camera)
 };
 
-ViewScore Score(const RenderResult& rendered, const Image& real, const Image& true_mask) {
+// The scores of one rendered view; `region` receives the evaluation region (the union of the
+// rendered and the true silhouette).
+ViewScore Score(const RenderResult& rendered, const Image& real, const Image& true_mask, Image* region) {
   ViewScore score;
   std::size_t both = 0, either = 0, truth = 0;
   for (std::size_t i = 0; i < true_mask.data.size(); ++i) {
@@ -70,11 +72,11 @@ ViewScore Score(const RenderResult& rendered, const Image& real, const Image& tr
   }
   score.iou = either ? static_cast<double>(both) / either : 1.0;
   score.xor_percent = truth ? 100.0 * (either - both) / truth : NAN;
-  const Image region = UnionMask(rendered.silhouette, true_mask);
+  *region = UnionMask(rendered.silhouette, true_mask);
   if (either > 0) {
-    score.psnr_db = MaskedPsnr(rendered.color, real, region);
-    score.ssim = MaskedSsim(rendered.color, real, region);
-    score.psnr_box_db = BoxPsnr(rendered.color, real, region);
+    score.psnr_db = MaskedPsnr(rendered.color, real, *region);
+    score.ssim = MaskedSsim(rendered.color, real, *region);
+    score.psnr_box_db = BoxPsnr(rendered.color, real, *region);
   }
   return score;
 }
@@ -213,15 +215,15 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
       row.frame = frame;
       row.vertex_error_m = vertex_error;
       const RenderResult rendered_template = template_texturer->Render(camera, true);
-      row.templ = Score(rendered_template, real, truth);
+      Image region;  // of the best geometry: the scan when there is one
+      row.templ = Score(rendered_template, real, truth, &region);
       std::optional<RenderResult> rendered_scan;
       if (scan) {
         rendered_scan = scan_texturer->Render(camera, true);
-        row.scan = Score(*rendered_scan, real, truth);
+        row.scan = Score(*rendered_scan, real, truth, &region);
       }
       const RenderResult& best = rendered_scan ? *rendered_scan : rendered_template;
       // The difference inside the evaluation region (the union of the masks, as for PSNR).
-      const Image region = UnionMask(truth, best.silhouette);
       Image difference = AbsoluteDifference(best.color, real);
       for (std::size_t i = 0; i < region.data.size(); ++i)
         if (region.data[i] == 0) difference.ptr<float>()[i] = 0.0f;

@@ -403,6 +403,23 @@ struct ProjectiveTexturer::Impl {
     int width = 0, height = 0, layers = 0;
   };
   Atlas image_atlas, depth_atlas;  // sizes of image_array and depth_array
+
+  // (Re)creates the 2D texture array `*texture` when its size differs from `size`.
+  static void ReallocateArray(GLuint* texture, Atlas* current, const Atlas& size, GLenum format, GLint filter,
+                              GLint wrap) {
+    if (size.width == current->width && size.height == current->height && size.layers == current->layers) return;
+    glDeleteTextures(1, texture);
+    glGenTextures(1, texture);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, *texture);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, format, size.width, size.height, size.layers);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, wrap);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, wrap);
+    const float border[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    glTexParameterfv(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_BORDER_COLOR, border);
+    *current = size;
+  }
   // Render targets: the G-buffer (pass 1) and the blended colour (pass 2).
   GLuint gbuffer_framebuffer = 0, output_framebuffer = 0;
   GLuint gbuffer_textures[3] = {0, 0, 0};  // world point RGBA32F, normal RGBA16F, base colour RGBA8
@@ -752,30 +769,9 @@ struct ProjectiveTexturer::Impl {
       map_height = std::max(map_height, vis_cameras[i].height);
     }
     const int layers = std::max(n, 1);
-    if (width != image_atlas.width || height != image_atlas.height || layers != image_atlas.layers) {
-      glDeleteTextures(1, &image_array);
-      glGenTextures(1, &image_array);
-      glBindTexture(GL_TEXTURE_2D_ARRAY, image_array);
-      glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RGBA8, width, height, layers);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-      image_atlas = {width, height, layers};
-    }
-    if (map_width != depth_atlas.width || map_height != depth_atlas.height || layers != depth_atlas.layers) {
-      glDeleteTextures(1, &depth_array);
-      glGenTextures(1, &depth_array);
-      glBindTexture(GL_TEXTURE_2D_ARRAY, depth_array);
-      glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RG32F, map_width, map_height, layers);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_BORDER);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_BORDER);
-      const float border[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-      glTexParameterfv(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_BORDER_COLOR, border);
-      depth_atlas = {map_width, map_height, layers};
-    }
+    ReallocateArray(&image_array, &image_atlas, {width, height, layers}, GL_RGBA8, GL_LINEAR, GL_CLAMP_TO_EDGE);
+    ReallocateArray(&depth_array, &depth_atlas, {map_width, map_height, layers}, GL_RG32F, GL_NEAREST,
+                    GL_CLAMP_TO_BORDER);  // border 0: outside a map nothing is visible
     for (int i = 0; i < n; ++i) {
       glBindTexture(GL_TEXTURE_2D_ARRAY, image_array);
       glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, i, input_cameras[i].width, input_cameras[i].height, 1, GL_RGB,

@@ -116,4 +116,16 @@ void AddJointPriorAndLimits(const BodyTemplate& body, int joint, const double* p
   }
 }
 
+ceres::Solver::Options TemplateFitSolverOptions(int max_iterations, int num_threads, double function_tolerance,
+                                                double parameter_tolerance) {
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  options.max_num_iterations = max_iterations;
+  options.num_threads = num_threads;
+  options.logging_type = ceres::SILENT;
+  options.function_tolerance = function_tolerance;
+  options.parameter_tolerance = parameter_tolerance;
+  return options;
+}
+
 }  // namespace confluent::tracking_internal

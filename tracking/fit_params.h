@@ -4,6 +4,7 @@
 
 #include <ceres/dynamic_cost_function.h>
 #include <ceres/problem.h>
+#include <ceres/solver.h>
 
 #include <Eigen/Core>
 #include <array>
@@ -13,6 +14,10 @@
 #include "tracking/body_template.h"
 
 namespace confluent::tracking_internal {
+
+// Solver options of the template fits: dense normal equations, silent, with these limits.
+ceres::Solver::Options TemplateFitSolverOptions(int max_iterations, int num_threads, double function_tolerance,
+                                                double parameter_tolerance);
 
 // Length and girth scale per shape group.
 constexpr int kShapeBlockSize = 2 * kNumShapeGroups;

@@ -52,6 +52,7 @@ using ti::ParamsToShape;
 using ti::PoseToParams;
 using ti::SegmentChains;
 using ti::SegmentsInWorld;
+using ti::TemplateFitSolverOptions;
 using ti::SegmentWorld;
 using ti::ShapeArrays;
 using ti::ShapeToParams;
@@ -404,13 +405,8 @@ void Solve(const BodyTemplate& body, Pairing* pairing, const ScanRegistrationOpt
   } else {
     problem.SetParameterBlockConstant(fp->shape);
   }
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  solver_options.max_num_iterations = options.max_iterations;
-  solver_options.num_threads = options.num_threads;
-  solver_options.logging_type = ceres::SILENT;
-  solver_options.function_tolerance = 1e-6;
-  solver_options.parameter_tolerance = 1e-7;
+  const ceres::Solver::Options solver_options =
+      TemplateFitSolverOptions(options.max_iterations, options.num_threads, 1e-6, 1e-7);
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, &problem, &summary);
   // Fold the root rotation increment into the reference.

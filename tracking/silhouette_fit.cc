@@ -109,6 +109,7 @@ using ti::FitParams;
 using ti::kShapeBlockSize;
 using ti::SegmentsInWorld;
 using ti::SegmentWorld;
+using ti::TemplateFitSolverOptions;
 using ti::ShapeArrays;
 
 // Residuals of one segment in one camera: model -> image samples and/or image -> model rays.
@@ -366,13 +367,8 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
   } else {
     problem.SetParameterBlockConstant(fp->shape);
   }
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  solver_options.max_num_iterations = coarse ? std::max(1, options.max_iterations / 2) : options.max_iterations;
-  solver_options.num_threads = options.num_threads;
-  solver_options.logging_type = ceres::SILENT;
-  solver_options.function_tolerance = 1e-5;
-  solver_options.parameter_tolerance = 1e-6;
+  const ceres::Solver::Options solver_options = TemplateFitSolverOptions(
+      coarse ? std::max(1, options.max_iterations / 2) : options.max_iterations, options.num_threads, 1e-5, 1e-6);
   ceres::Solver::Summary solver_summary;
   ceres::Solve(solver_options, &problem, &solver_summary);
   if (first) summary->initial_cost = solver_summary.initial_cost;

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "calib/rig_check.h"
 #include "core/error.h"
 #include "core/mesh_validation.h"
 #include "deform/cholmod_solver.h"
@@ -27,16 +28,6 @@ bool Inside(const Image& mask, const Eigen::Vector2d& pixel) {
   const int x = static_cast<int>(pixel.x() + 0.5), y = static_cast<int>(pixel.y() + 0.5);  // nearest pixel
   if (x >= mask.width || y >= mask.height) return false;
   return mask.data[static_cast<std::size_t>(y) * mask.width + x] > 127;
-}
-
-double Iou(const Image& a, const Image& b) {
-  long both = 0, either = 0;
-  for (std::size_t i = 0; i < a.data.size(); ++i) {
-    const bool x = a.data[i] > 127, y = b.data[i] > 127;
-    both += x && y;
-    either += x || y;
-  }
-  return either ? static_cast<double>(both) / either : 1.0;
 }
 
 // Area-weighted vertex normals (unit; zero for isolated vertices).
@@ -146,7 +137,10 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
   mesh.faces = s.faces;
   if (!vertices.allFinite()) throw std::invalid_argument("Refine: non-finite vertices");
   const RowMatrixX3d start = vertices;
-  const bool closed = s.closed;
+  // The scan's own silhouette: the fast facing-triangle fill when the scan is watertight.
+  auto silhouette = [&s](const Mesh& posed, const Camera& camera) {
+    return s.closed ? RasterizeClosedMesh(posed, camera) : RasterizeSilhouette(posed, camera);
+  };
   const int threads = std::max(1, std::min<int>(s.options.threads, static_cast<int>(usable.size())));
   for (int round = 0; round < s.options.iterations && !usable.empty(); ++round) {
     const RowMatrixX3d normals = VertexNormals(mesh.vertices, mesh.faces);
@@ -155,8 +149,8 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
     auto work = [&](int part) {
       for (std::size_t i = part; i < usable.size(); i += threads) {
         const int c = usable[i];
-        const Image own = closed ? RasterizeClosedMesh(mesh, cameras[c]) : RasterizeSilhouette(mesh, cameras[c]);
-        if (round == 0) summary.iou_before[c] = Iou(own, masks[c]);
+        const Image own = silhouette(mesh, cameras[c]);
+        if (round == 0) summary.iou_before[c] = MaskIoU(own, masks[c]);
         s.RimSteps(mesh, normals, cameras[c], own, masks[c], &step_sums[part], &counts[part]);
       }
     };
@@ -183,7 +177,7 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
     }
   }
   for (int c : usable)
-    summary.iou_after[c] = Iou(closed ? RasterizeClosedMesh(mesh, cameras[c]) : RasterizeSilhouette(mesh, cameras[c]), masks[c]);
+    summary.iou_after[c] = MaskIoU(silhouette(mesh, cameras[c]), masks[c]);
   const Eigen::VectorXd shift = (mesh.vertices - start).rowwise().norm();
   summary.mean_shift_m = n ? shift.mean() : 0.0;
   summary.max_shift_m = n ? shift.maxCoeff() : 0.0;

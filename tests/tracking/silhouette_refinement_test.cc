@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "calib/rig_check.h"
 #include "core/mesh_ops.h"
 #include "tracking/overlap.h"
 #include "tracking/silhouette_refinement.h"
@@ -16,15 +17,6 @@ namespace {
 Camera RingCamera(double azimuth_rad, double height_m) {
   const Eigen::Vector3d centre(3.0 * std::cos(azimuth_rad), 3.0 * std::sin(azimuth_rad), height_m);
   return LookAtCamera("ring", centre, Eigen::Vector3d::Zero(), 320, 240, 320.0);
-}
-
-double Iou(const Image& a, const Image& b) {
-  long both = 0, either = 0;
-  for (std::size_t i = 0; i < a.data.size(); ++i) {
-    both += a.data[i] && b.data[i];
-    either += a.data[i] || b.data[i];
-  }
-  return static_cast<double>(both) / either;
 }
 
 // Mean distance of the vertices from the true sphere (radius 0.3 m at the origin).
@@ -58,8 +50,8 @@ TEST(SilhouetteRefinement, PullsAnOffsetShrunkSphereOntoTheSilhouettes) {
   const Image unseen_mask = RasterizeClosedMesh(truth, unseen);
   Mesh refined_mesh = start;
   refined_mesh.vertices = refined;
-  EXPECT_GT(Iou(RasterizeClosedMesh(refined_mesh, unseen), unseen_mask),
-            Iou(RasterizeClosedMesh(start, unseen), unseen_mask) + 0.05);
+  EXPECT_GT(MaskIoU(RasterizeClosedMesh(refined_mesh, unseen), unseen_mask),
+            MaskIoU(RasterizeClosedMesh(start, unseen), unseen_mask) + 0.05);
 }
 
 TEST(RasterizeClosedMesh, SphereCoversItsProjectedDisc) {
@@ -74,7 +66,9 @@ TEST(RasterizeClosedMesh, SphereCoversItsProjectedDisc) {
   // The centre-sampled fill lies within the conservative one.
   const Image conservative = RasterizeSilhouette(sphere, camera);
   for (std::size_t i = 0; i < mask.data.size(); ++i)
-    if (mask.data[i]) ASSERT_EQ(conservative.data[i], 255) << i;
+    if (mask.data[i]) {
+      ASSERT_EQ(conservative.data[i], 255) << i;
+    }
 }
 
 TEST(SilhouetteRefinement, EmptyMasksAreSkippedAndWrongSizesRefused) {
