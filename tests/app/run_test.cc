@@ -157,6 +157,15 @@ TEST_F(RunCommandTest, WrongExcludedCameraNameIsRefused) {
   EXPECT_NE(result.stderr_text.find("cam00"), std::string::npos) << "the message should list the known cameras";
 }
 
+TEST_F(RunCommandTest, OutOfRangeRefineIterationsIsAUsageError) {
+  testing::TempDir out;
+  const testing::CommandResult result =
+      RunConfluent({"run", Capture(), "--out", out / "run", "--refine-iterations", "0"});
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.stderr_text.find("--refine-iterations"), std::string::npos) << result.stderr_text;
+  EXPECT_FALSE(fs::exists(out / "run/masks")) << "no work before the options are checked";
+}
+
 TEST_F(RunCommandTest, CorruptImageMidwayStopsWithItsNameAndKeepsEarlierFrames) {
   testing::TempDir out;
   const std::string capture = out / "capture";
