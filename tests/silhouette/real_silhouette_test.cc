@@ -28,15 +28,6 @@ Image Binarize(const Image& image) {
   return mask;
 }
 
-double MaskIou(const Image& a, const Image& b) {
-  std::size_t both = 0, either = 0;
-  for (std::size_t i = 0; i < a.data.size(); ++i) {
-    both += a.data[i] && b.data[i];
-    either += a.data[i] || b.data[i];
-  }
-  return either ? static_cast<double>(both) / either : 1.0;
-}
-
 TEST(RealSilhouettes, TsinghuaGreenScreenMatchesGroundTruth) {
   const std::string data = testing::SharedDataPath("real/tsinghua_lkB");
   if (data.empty()) GTEST_SKIP() << "../shared/data/real/tsinghua_lkB is absent";
@@ -56,7 +47,7 @@ TEST(RealSilhouettes, TsinghuaGreenScreenMatchesGroundTruth) {
     EXPECT_EQ(extractor.info().method, SilhouetteMethod::kGreen) << camera << ": a green screen, detected";
     MaskSummary summary;
     const Image mask = extractor.Extract(image, 0, &summary);
-    const double iou = MaskIou(mask, truth);
+    const double iou = MaskIoU(mask, truth);
     std::printf("%-7s %-7s %9.3f %7.4f\n", camera, SilhouetteMethodName(extractor.info().method),
                 extractor.info().greenness, iou);
     sum += iou;
@@ -125,13 +116,13 @@ TEST(RealSilhouettes, UtrechtCleanPlateMasksAndVisualHull) {
     }
     std::printf("\n");
   }
-  // Reported, not asserted: with the third-party calibration as imported today the hull IoU is
-  // about 0.05 for masks that look right, which points at the calibration, not the masks.
+  // Reported, not asserted: about 0.61 with config.xml's calibration (the hull of 3 cameras is
+  // loose, and the third-party calibration is itself inexact; see issue 2's notes).
   std::printf("mean hull IoU %.3f\n", sum / count);
   // The actor sits still: each camera's foreground must be stable across the frames.
   for (int c = 0; c < rig.size(); ++c)
     for (std::size_t f = 1; f < frames.size(); ++f)
-      EXPECT_GE(MaskIou(masks[f][c], masks[0][c]), 0.85) << rig.cameras[c].name << " frame " << frames[f];
+      EXPECT_GE(MaskIoU(masks[f][c], masks[0][c]), 0.85) << rig.cameras[c].name << " frame " << frames[f];
 }
 
 TEST(RealSilhouettes, Pose2simLearnedBackgroundBestEffort) {
