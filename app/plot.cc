@@ -14,8 +14,26 @@ namespace {
 
 std::string Number(double value) {
   char text[32];
-  std::snprintf(text, sizeof text, std::abs(value) >= 100 ? "%.0f" : std::abs(value) >= 10 ? "%.1f" : "%.3g", value);
+  const bool whole = std::abs(value - std::round(value)) < 1e-9 * std::max(1.0, std::abs(value));
+  std::snprintf(text, sizeof text, whole || std::abs(value) >= 100 ? "%.0f" : std::abs(value) >= 10 ? "%.1f" : "%.3g", value);
   return text;
+}
+
+// Round tick values (multiples of 1, 2 or 5 times a power of ten) in [lo, hi], at most about
+// `max_count` of them, so that an axis of frames is labelled 0, 20, 40 ... rather than 19.2, 38.4.
+std::vector<double> NiceTicks(double lo, double hi, int max_count) {
+  const double raw = (hi - lo) / std::max(1, max_count);
+  const double power = std::pow(10.0, std::floor(std::log10(raw)));
+  double step = 10 * power;
+  for (double factor : {1.0, 2.0, 5.0})
+    if (factor * power >= raw) {
+      step = factor * power;
+      break;
+    }
+  std::vector<double> ticks;
+  for (double t = std::ceil(lo / step - 1e-9) * step; t <= hi + 1e-9 * step; t += step)
+    ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
+  return ticks;
 }
 
 void Text(cv::Mat& canvas, const std::string& text, cv::Point origin, double scale = 0.45,
@@ -55,12 +73,12 @@ Image DrawLineChart(const std::vector<PlotSeries>& series, const std::string& ti
     return cv::Point(static_cast<int>(std::lround(area.x + (x - x_lo) / (x_hi - x_lo) * area.width)),
                      static_cast<int>(std::lround(area.y + area.height - (y - y_lo) / (y_hi - y_lo) * area.height)));
   };
-  for (int i = 0; i <= 5; ++i) {  // grid and ticks
-    const double y = y_lo + (y_hi - y_lo) * i / 5.0, x = x_lo + (x_hi - x_lo) * i / 5.0;
+  for (double y : NiceTicks(y_lo, y_hi, 5)) {  // grid and ticks
     cv::line(canvas, to_pixel(x_lo, y), to_pixel(x_hi, y), cv::Scalar(225, 225, 225));
     Text(canvas, Number(y), cv::Point(8, to_pixel(x_lo, y).y + 4), 0.4);
-    Text(canvas, Number(x), cv::Point(to_pixel(x, y_lo).x - 10, area.y + area.height + 18), 0.4);
   }
+  for (double x : NiceTicks(x_lo, x_hi, 6))
+    Text(canvas, Number(x), cv::Point(to_pixel(x, y_lo).x - 10, area.y + area.height + 18), 0.4);
   cv::rectangle(canvas, area, cv::Scalar(90, 90, 90));
   Text(canvas, title, cv::Point(left, 24), 0.6);
   Text(canvas, x_label, cv::Point(area.x + area.width / 2 - 30, height - 10));
