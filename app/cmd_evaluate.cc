@@ -34,6 +34,8 @@ struct ViewScore {
   double psnr_db = NAN;
   double ssim = NAN;
   double psnr_box_db = NAN;  // second convention: see BoxPsnr
+  double psnr_inside_db = NAN;          // inside the intersection of the two silhouettes
+  double xor_error_share_percent = NAN; // share of the squared error in the union on XOR pixels
 };
 
 // PSNR in the bounding box of `region` with the pixels outside `region` set to black in both
@@ -64,11 +66,13 @@ struct Row {
 ViewScore Score(const RenderResult& rendered, const Image& real, const Image& true_mask, Image* region) {
   ViewScore score;
   std::size_t both = 0, either = 0, truth = 0;
+  Image intersection(true_mask.width, true_mask.height, 1);
   for (std::size_t i = 0; i < true_mask.data.size(); ++i) {
     const bool a = rendered.silhouette.data[i] != 0, b = true_mask.data[i] != 0;
     both += a && b;
     either += a || b;
     truth += b;
+    intersection.data[i] = a && b ? 255 : 0;
   }
   score.iou = either ? static_cast<double>(both) / either : 1.0;
   score.xor_percent = truth ? 100.0 * (either - both) / truth : NAN;
@@ -77,6 +81,13 @@ ViewScore Score(const RenderResult& rendered, const Image& real, const Image& tr
     score.psnr_db = MaskedPsnr(rendered.color, real, *region);
     score.ssim = MaskedSsim(rendered.color, real, *region);
     score.psnr_box_db = BoxPsnr(rendered.color, real, *region);
+  }
+  if (both > 0) {
+    score.psnr_inside_db = MaskedPsnr(rendered.color, real, intersection);
+    // Squared errors from the PSNRs (peak 1): SSE = MSE * pixels.
+    const double sse_union = std::pow(10.0, -score.psnr_db / 10) * either;
+    const double sse_inside = std::pow(10.0, -score.psnr_inside_db / 10) * both;
+    score.xor_error_share_percent = sse_union > 0 ? 100.0 * std::max(0.0, 1.0 - sse_inside / sse_union) : 0.0;
   }
   return score;
 }
@@ -269,6 +280,10 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   const std::vector<double> scan_box = column([](const Row& r) { return r.scan.psnr_box_db; });
   const std::vector<double> template_box = column([](const Row& r) { return r.templ.psnr_box_db; });
   const std::vector<double> template_xor = column([](const Row& r) { return r.templ.xor_percent; });
+  const std::vector<double> scan_inside = column([](const Row& r) { return r.scan.psnr_inside_db; });
+  const std::vector<double> template_inside = column([](const Row& r) { return r.templ.psnr_inside_db; });
+  const std::vector<double> scan_share = column([](const Row& r) { return r.scan.xor_error_share_percent; });
+  const std::vector<double> template_share = column([](const Row& r) { return r.templ.xor_error_share_percent; });
   std::vector<double> vertex_errors;
   for (std::size_t i = 0; i < rows.size(); i += heldout.size()) vertex_errors.push_back(rows[i].vertex_error_m);
 
@@ -276,28 +291,36 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   summary.heldout = args.get_all("heldout");
   summary.frames = static_cast<int>(frames.size());
   summary.has_scan = has_scan;
-  summary.scan = {Mean(scan_iou), Min(scan_iou), Mean(scan_xor), Mean(scan_psnr), Mean(scan_ssim), Mean(scan_box)};
-  summary.templ = {Mean(template_iou), Min(template_iou), Mean(template_xor), Mean(template_psnr), Mean(template_ssim),
-                   Mean(template_box)};
+  summary.scan = {Mean(scan_iou), Min(scan_iou),   Mean(scan_xor),    Mean(scan_psnr),
+                  Mean(scan_ssim), Mean(scan_box), Mean(scan_inside), Mean(scan_share)};
+  summary.templ = {Mean(template_iou),  Min(template_iou),  Mean(template_xor),    Mean(template_psnr),
+                   Mean(template_ssim), Mean(template_box), Mean(template_inside), Mean(template_share)};
   summary.vertex_error_mean_m = Mean(vertex_errors);
   summary.warnings = warnings;
 
   nlohmann::json json = summary.ToJson();
   std::string csv = "camera,frame,scan_iou,scan_xor_percent,scan_psnr_db,scan_ssim,template_iou,template_xor_percent,"
-                    "template_psnr_db,template_ssim,scan_psnr_box_db,template_psnr_box_db,scan_vertex_error_m\n";
+                    "template_psnr_db,template_ssim,scan_psnr_box_db,template_psnr_box_db,scan_vertex_error_m,"
+                    "scan_psnr_inside_db,scan_xor_error_share_percent,template_psnr_inside_db,template_xor_error_share_percent\n";
   for (const Row& r : rows) {
     json["rows"].push_back({{"camera", r.camera}, {"frame", r.frame},
                             {"scan", {{"iou", JsonNumber(r.scan.iou)}, {"xor_percent", JsonNumber(r.scan.xor_percent)},
                                       {"psnr_db", JsonNumber(r.scan.psnr_db)}, {"ssim", JsonNumber(r.scan.ssim)},
-                                      {"psnr_box_db", JsonNumber(r.scan.psnr_box_db)}}},
+                                      {"psnr_box_db", JsonNumber(r.scan.psnr_box_db)},
+                                      {"psnr_inside_db", JsonNumber(r.scan.psnr_inside_db)},
+                                      {"xor_error_share_percent", JsonNumber(r.scan.xor_error_share_percent)}}},
                             {"template", {{"iou", JsonNumber(r.templ.iou)}, {"xor_percent", JsonNumber(r.templ.xor_percent)},
                                           {"psnr_db", JsonNumber(r.templ.psnr_db)}, {"ssim", JsonNumber(r.templ.ssim)},
-                                          {"psnr_box_db", JsonNumber(r.templ.psnr_box_db)}}},
+                                          {"psnr_box_db", JsonNumber(r.templ.psnr_box_db)},
+                                          {"psnr_inside_db", JsonNumber(r.templ.psnr_inside_db)},
+                                          {"xor_error_share_percent", JsonNumber(r.templ.xor_error_share_percent)}}},
                             {"scan_vertex_error_m", JsonNumber(r.vertex_error_m)}});
     csv += r.camera + "," + std::to_string(r.frame) + "," + Csv(r.scan.iou) + "," + Csv(r.scan.xor_percent) + "," +
            Csv(r.scan.psnr_db) + "," + Csv(r.scan.ssim) + "," + Csv(r.templ.iou) + "," + Csv(r.templ.xor_percent) + "," +
            Csv(r.templ.psnr_db) + "," + Csv(r.templ.ssim) + "," + Csv(r.scan.psnr_box_db) + "," +
-           Csv(r.templ.psnr_box_db) + "," + Csv(r.vertex_error_m) + "\n";
+           Csv(r.templ.psnr_box_db) + "," + Csv(r.vertex_error_m) + "," + Csv(r.scan.psnr_inside_db) + "," +
+           Csv(r.scan.xor_error_share_percent) + "," + Csv(r.templ.psnr_inside_db) + "," +
+           Csv(r.templ.xor_error_share_percent) + "\n";
   }
   WriteTextFile(run.Path("metrics.json"), json.dump(1) + "\n");
   WriteTextFile(run.Path("metrics.csv"), csv);
@@ -353,7 +376,10 @@ CommandSpec MakeEvaluateCommand() {
       "silhouette IoU and XOR error (% of the true silhouette area), and PSNR/SSIM computed inside the union\n"
       "of the true and the rendered silhouette (pixels outside both are background in both and are not\n"
       "counted); also, as psnr_box, the PSNR in the bounding box of that union with the pixels outside it\n"
-      "black in both images (the Neural Body / ZJU-MoCap convention). True silhouettes come from --masks DIR, else from the run's extracted masks (RUN/masks).\n"
+      "black in both images (the Neural Body / ZJU-MoCap convention). The error split: psnr_inside, the PSNR\n"
+      "inside the intersection of the two silhouettes (texture alone), and xor_error_share, the share of the\n"
+      "squared error in the union on pixels only one silhouette covers (silhouette mismatch).\n"
+      "True silhouettes come from --masks DIR, else from the run's extracted masks (RUN/masks).\n"
       "With --gt-meshes DIR (meshes with the scan's topology, DIR/<frame>.ply) the scan's mean vertex error\n"
       "is reported. Writes RUN/metrics.json, metrics.csv, plots/*.png (per-frame metrics, error heat maps),\n"
       "evaluation/<cam>/<frame>.png (real | scan | template | difference) and report.html.";

@@ -19,12 +19,16 @@ double FromJson(const nlohmann::json& v) { return v.is_number() ? v.get<double>(
 nlohmann::json ScoresJson(const GeometryScores& s) {
   return {{"iou_mean", JsonNumber(s.iou_mean)},     {"iou_min", JsonNumber(s.iou_min)},
           {"xor_percent_mean", JsonNumber(s.xor_percent_mean)}, {"psnr_db_mean", JsonNumber(s.psnr_db_mean)},
-          {"ssim_mean", JsonNumber(s.ssim_mean)}, {"psnr_box_db_mean", JsonNumber(s.psnr_box_db_mean)}};
+          {"ssim_mean", JsonNumber(s.ssim_mean)}, {"psnr_box_db_mean", JsonNumber(s.psnr_box_db_mean)},
+          {"psnr_inside_db_mean", JsonNumber(s.psnr_inside_db_mean)},
+          {"xor_error_share_percent_mean", JsonNumber(s.xor_error_share_percent_mean)}};
 }
 
 GeometryScores ScoresFromJson(const nlohmann::json& j) {
   return {FromJson(j.at("iou_mean")), FromJson(j.at("iou_min")), FromJson(j.at("xor_percent_mean")),
-          FromJson(j.at("psnr_db_mean")), FromJson(j.at("ssim_mean")), FromJson(j.value("psnr_box_db_mean", nlohmann::json()))};
+          FromJson(j.at("psnr_db_mean")), FromJson(j.at("ssim_mean")), FromJson(j.value("psnr_box_db_mean", nlohmann::json())),
+          FromJson(j.value("psnr_inside_db_mean", nlohmann::json())),
+          FromJson(j.value("xor_error_share_percent_mean", nlohmann::json()))};
 }
 
 std::string Fixed(double v, int decimals) {
@@ -94,6 +98,11 @@ std::string SummaryTable(const EvaluationSummary& summary) {
   };
   if (summary.has_scan) row("scan", summary.scan);
   row("template", summary.templ);
+  const GeometryScores& best = summary.has_scan ? summary.scan : summary.templ;
+  if (std::isfinite(best.psnr_inside_db_mean))
+    out << "  error split (" << (summary.has_scan ? "scan" : "template") << "): PSNR inside both silhouettes "
+        << Fixed(best.psnr_inside_db_mean, 2) << " dB; the silhouette XOR band holds "
+        << Fixed(best.xor_error_share_percent_mean, 0) << "% of the squared error in the union\n";
   if (std::isfinite(summary.vertex_error_mean_m))
     out << "  scan vertex error against the ground truth: mean " << Fixed(100.0 * summary.vertex_error_mean_m, 2) << " cm\n";
   return out.str();
@@ -112,7 +121,9 @@ std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, c
   html << "<p>PSNR and SSIM are computed inside the union of the true and the rendered silhouette; IoU and the XOR "
           "error (% of the true silhouette area) over the whole image. \"PSNR box\" is the PSNR in the bounding box of "
           "that union with the pixels outside the union black in both images (the Neural Body / ZJU-MoCap "
-          "convention).</p>\n";
+          "convention). The error split separates texture from silhouette: the PSNR inside the intersection of the "
+          "two silhouettes, and the share of the squared error in the union that falls on pixels only one of them "
+          "covers.</p>\n";
   for (const std::string& warning : summary.warnings) html << "<p><b>Warning:</b> " << Escape(warning) << "</p>\n";
   if (fs::exists(run.VideoPath("orbit")))
     html << "<h2>3D video</h2>\n<video controls width=\"960\" src=\"renders/orbit.mp4\"></video>\n";

@@ -22,6 +22,11 @@ struct GeometryScores {
   double psnr_db_mean = 0.0;
   double ssim_mean = 0.0;
   double psnr_box_db_mean = 0.0;  // bounding-box convention (see `confluent evaluate --help`)
+  // The error split: PSNR inside the intersection of the true and the rendered silhouette (the
+  // texture alone), and the share of the squared error in the union that lies in the XOR band
+  // (the silhouette mismatch), in %.
+  double psnr_inside_db_mean = 0.0;
+  double xor_error_share_percent_mean = 0.0;
 };
 
 // What `confluent evaluate` found.

@@ -96,6 +96,13 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
   EXPECT_GT(metrics["scan"]["psnr_db_mean"].get<double>(), 15.0);
   EXPECT_LT(metrics["scan_vertex_error_mean_m"].get<double>(), 0.08);
   EXPECT_EQ(metrics["rows"].size(), 20u);
+  // The error split: pixels only one silhouette covers compare actor with background, so the
+  // texture alone (inside both silhouettes) scores higher than the union, and the XOR band holds
+  // part, not all, of the error.
+  EXPECT_GT(metrics["scan"]["psnr_inside_db_mean"].get<double>(), metrics["scan"]["psnr_db_mean"].get<double>());
+  const double share = metrics["scan"]["xor_error_share_percent_mean"].get<double>();
+  EXPECT_GT(share, 0.0);
+  EXPECT_LT(share, 100.0);
   for (const char* file : {"metrics.csv", "report.html", "plots/iou_per_frame.png", "plots/psnr_per_frame.png",
                            "plots/error_heatmap_holdout0.png", "evaluation/holdout1/000000.png"})
     EXPECT_TRUE(fs::exists(fs::path(run) / file)) << file;
