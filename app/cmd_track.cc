@@ -13,6 +13,7 @@
 #include "calib/capture.h"
 #include "calib/rig_check.h"
 #include "core/atomic_file.h"
+#include "core/bvh_io.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"

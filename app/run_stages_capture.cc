@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "app/run_stages.h"
+#include "core/bvh_io.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"

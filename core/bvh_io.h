@@ -1,5 +1,5 @@
 #pragma once
-// Reading BVH motion-capture files (Biovision hierarchy) into a Skeleton and Poses.
+// Reading and writing BVH motion-capture files (Biovision hierarchy) as a Skeleton and Poses.
 
 #include <string>
 #include <vector>
@@ -33,5 +33,12 @@ struct BvhMotion {
 // (added to the root offset). Throws InputError "<path>: line N: ..." on a missing file, bad
 // syntax, an unknown channel, a truncated hierarchy or motion block, or a wrong value count.
 BvhMotion ReadBvh(const std::string& path, const BvhReadOptions& options = {});
+
+// Writes a BVH file (Y-up, centimetres, as most BVH tools expect): root with 6 channels
+// (Xposition Yposition Zposition Zrotation Xrotation Yrotation), other joints with 3
+// rotation channels (Z X Y), childless joints as End Sites. `skeleton` and `poses` are in the
+// world frame (Z up, metres); read it back with ReadBvh({scale = 0.01, y_up_to_z_up = true}).
+// Written atomically; throws OutputError on failure.
+void WriteBvh(const std::string& path, const Skeleton& skeleton, const std::vector<Pose>& poses, double frame_time_s);
 
 }  // namespace confluent

@@ -2,74 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <functional>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
 
 namespace confluent {
-namespace {
-
-using Eigen::Matrix3d;
 using Eigen::Vector3d;
-
-// World (Z up) -> BVH (Y up): (x, y, z) -> (x, z, -y).
-Matrix3d BvhFromWorld() {
-  Matrix3d M;
-  M << 1, 0, 0, 0, 0, 1, 0, -1, 0;
-  return M;
-}
-
-std::string Num(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6f", std::abs(v) < 5e-7 ? 0.0 : v);
-  return buffer;
-}
-
-}  // namespace
-
-void WriteBvh(const std::string& path, const Skeleton& skeleton, const std::vector<Pose>& poses, double frame_time_s) {
-  const Matrix3d M = BvhFromWorld();
-  const int n = skeleton.size();
-  std::vector<std::vector<int>> children(n);
-  for (int j = 1; j < n; ++j) children[skeleton.joints[j].parent].push_back(j);
-  std::vector<int> channel_joints;  // joints with channels, in file order
-  std::ostringstream out;
-  out << "HIERARCHY\n";
-  std::function<void(int, int)> write = [&](int j, int depth) {
-    const std::string indent(2 * depth, ' ');
-    const Vector3d offset = 100.0 * M * skeleton.joints[j].offset_in_parent;
-    if (j != 0 && children[j].empty()) {
-      out << indent << "End Site\n" << indent << "{\n"
-          << indent << "  OFFSET " << Num(offset.x()) << " " << Num(offset.y()) << " " << Num(offset.z()) << "\n"
-          << indent << "}\n";
-      return;
-    }
-    out << indent << (j == 0 ? "ROOT " : "JOINT ") << skeleton.joints[j].name << "\n" << indent << "{\n";
-    out << indent << "  OFFSET " << Num(offset.x()) << " " << Num(offset.y()) << " " << Num(offset.z()) << "\n";
-    out << indent << "  CHANNELS " << (j == 0 ? "6 Xposition Yposition Zposition " : "3 ") << "Zrotation Xrotation Yrotation\n";
-    channel_joints.push_back(j);
-    for (int c : children[j]) write(c, depth + 1);
-    out << indent << "}\n";
-  };
-  write(0, 0);
-  out << "MOTION\nFrames: " << poses.size() << "\nFrame Time: " << Num(frame_time_s) << "\n";
-  for (const Pose& pose : poses) {
-    const Vector3d t = 100.0 * M * pose.root_translation;
-    out << Num(t.x()) << " " << Num(t.y()) << " " << Num(t.z());
-    for (int j : channel_joints) {
-      const Matrix3d R = j < static_cast<int>(pose.local_rotations.size()) ? pose.local_rotations[j].toRotationMatrix()
-                                                                            : Matrix3d::Identity();
-      const Vector3d euler = (M * R * M.transpose()).eulerAngles(2, 0, 1) * (180.0 / M_PI);
-      out << " " << Num(euler(0)) << " " << Num(euler(1)) << " " << Num(euler(2));
-    }
-    out << "\n";
-  }
-  WriteTextFile(path, out.str());
-}
 
 void WritePosesJson(const std::string& path, const BodyTemplate& body, const BodyShape& shape,
                     const std::vector<std::string>& camera_names, const std::vector<TrackedFrame>& frames, double fps) {

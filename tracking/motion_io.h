@@ -1,5 +1,5 @@
 #pragma once
-// Writing the tracker's results: poses.json and BVH.
+// Writing and reading the tracker's results as poses.json (BVH: core/bvh_io.h).
 
 #include <string>
 #include <vector>
@@ -9,13 +9,6 @@
 #include "tracking/tracker.h"
 
 namespace confluent {
-
-// Writes a BVH file (Y-up, centimetres, as most BVH tools expect): root with 6 channels
-// (Xposition Yposition Zposition Zrotation Xrotation Yrotation), other joints with 3
-// rotation channels (Z X Y), childless joints as End Sites. `skeleton` and `poses` are in the
-// world frame (Z up, metres); read it back with ReadBvh({scale = 0.01, y_up_to_z_up = true}).
-// Written atomically; throws OutputError on failure.
-void WriteBvh(const std::string& path, const Skeleton& skeleton, const std::vector<Pose>& poses, double frame_time_s);
 
 // Writes poses.json: joint names and parents, DOF layout with limits, fitted shape, and per
 // frame the root, joint angles (radians), local rotations (w x y z), world joint positions

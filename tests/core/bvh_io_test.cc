@@ -103,6 +103,49 @@ TEST(BvhIo, BadFilesNameFileAndLine) {
   EXPECT_THROW(ReadBvh(dir / "missing.bvh"), InputError);
 }
 
+TEST(BvhIo, WrittenMotionReadsBackWithTheSameJointPositions) {
+  // A branching chain (a root with two children, one of them with a child of its own), Z-up,
+  // metres, with arbitrary rotations: written as Y-up centimetres, read back with the inverse.
+  Skeleton skeleton;
+  skeleton.joints = {{"hips", -1, {0.1, -0.2, 0.9}},
+                     {"spine", 0, {0.0, 0.0, 0.25}},
+                     {"neck", 1, {0.02, 0.0, 0.3}},
+                     {"leg", 0, {0.1, 0.0, -0.1}}};
+  std::vector<Pose> poses;
+  for (int f = 0; f < 3; ++f) {
+    Pose pose = Pose::Rest(skeleton.size());
+    pose.root_translation = Eigen::Vector3d(0.05 * f, -0.1, 0.02 * f);
+    for (int j = 0; j < skeleton.size(); ++j)
+      pose.local_rotations[j] = Eigen::AngleAxisd(0.3 + 0.4 * f + 0.2 * j, Eigen::Vector3d(1, 2 - j, 0.5 * f).normalized());
+    poses.push_back(pose);
+  }
+  const testing::TempDir dir;
+  WriteBvh(dir / "motion.bvh", skeleton, poses, 1.0 / 30);
+  BvhReadOptions options;
+  options.scale = 0.01;
+  options.y_up_to_z_up = true;
+  const BvhMotion motion = ReadBvh(dir / "motion.bvh", options);
+  EXPECT_NEAR(motion.frame_time_s, 1.0 / 30, 1e-6);
+  ASSERT_EQ(motion.frames.size(), poses.size());
+  // The childless "neck" and "leg" become End Sites named after their parents.
+  EXPECT_GE(motion.skeleton.IndexOf("spine_end"), 0);
+  EXPECT_GE(motion.skeleton.IndexOf("hips_end"), 0);
+  for (std::size_t f = 0; f < poses.size(); ++f) {
+    const auto expected = JointPositions(skeleton, poses[f]);
+    const auto actual = JointPositions(motion.skeleton, motion.frames[f]);
+    ASSERT_EQ(actual.size(), expected.size());
+    for (int j = 0; j < skeleton.size(); ++j) EXPECT_LT((expected[j] - actual[j]).norm(), 1e-5) << "frame " << f << " joint " << j;
+  }
+}
+
+TEST(BvhIo, WritingBelowARegularFileIsOutputError) {
+  const testing::TempDir dir;
+  std::ofstream(dir / "not_a_folder") << "x";
+  Skeleton skeleton;
+  skeleton.joints = {{"root", -1, {0, 0, 1}}, {"tip", 0, {0, 0, 0.5}}};
+  EXPECT_THROW(WriteBvh(dir / "not_a_folder/motion.bvh", skeleton, {Pose::Rest(2)}, 0.04), OutputError);
+}
+
 TEST(BvhIo, ReadsRealCmuFile) {
   const std::string path = testing::SharedDataPath("bvh/cmu_131_01.bvh");
   if (path.empty()) GTEST_SKIP() << "shared data bvh/cmu_131_01.bvh not available";
