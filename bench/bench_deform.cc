@@ -4,6 +4,7 @@
 //   BM_Factor:        construction (both Cholesky factorisations + 16 weight fields)
 //   BM_FrameSegments: one frame, segment-rigid fast path (weight fields)
 //   BM_FrameGeneral:  one frame, the same pairs without labels (harmonic solve per frame)
+//   BM_FrameSegmentsSingle: BM_FrameSegments with single-precision factors (an option)
 // Report per-frame medians; the scaling exponent is the slope of log(time) over log(triangles).
 
 #include <benchmark/benchmark.h>
@@ -107,9 +108,11 @@ void BM_Factor(benchmark::State& state) {
   SetCounters(state, scene);
 }
 
-void RunFrames(benchmark::State& state, bool labelled) {
+void RunFrames(benchmark::State& state, bool labelled, bool single_precision = false) {
   const Scene& scene = GetScene(static_cast<int>(state.range(0)));
-  ConfluentMotion motion(scene.scan, scene.template_mesh, labelled ? scene.labelled : scene.unlabelled);
+  ConfluentMotionOptions options;
+  options.single_precision_solves = single_precision;
+  ConfluentMotion motion(scene.scan, scene.template_mesh, labelled ? scene.labelled : scene.unlabelled, options);
   std::vector<RowMatrixX3d> poses;
   for (int f = 0; f < 8; ++f) poses.push_back(Pose(scene.template_mesh, f));
   int frame = 0;
@@ -126,10 +129,12 @@ void RunFrames(benchmark::State& state, bool labelled) {
 
 void BM_FrameSegments(benchmark::State& state) { RunFrames(state, true); }
 void BM_FrameGeneral(benchmark::State& state) { RunFrames(state, false); }
+void BM_FrameSegmentsSingle(benchmark::State& state) { RunFrames(state, true, true); }
 
 BENCHMARK(BM_Factor)->Arg(12500)->Arg(50000)->Arg(132000)->Arg(264000)->Unit(benchmark::kMillisecond)->Iterations(2);
 BENCHMARK(BM_FrameSegments)->Arg(12500)->Arg(50000)->Arg(132000)->Arg(264000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FrameGeneral)->Arg(12500)->Arg(50000)->Arg(132000)->Arg(264000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FrameSegmentsSingle)->Arg(50000)->Arg(264000)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace confluent

@@ -8,9 +8,10 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
+
+#include "deform/helper_thread.h"
 
 namespace confluent {
 
@@ -30,7 +31,16 @@ struct SupernodalView {
   const int* value_start = nullptr;
   const int* rows = nullptr;
   const double* values = nullptr;
+  const double* inverse_diagonal = nullptr;  // per column, 1 / L(j, j): a multiply instead of a divide
+  const float* float_values = nullptr;       // values rounded to single precision, or null
 };
+
+template <typename T>
+const T* Values(const SupernodalView& f);
+template <>
+const double* Values<double>(const SupernodalView& f) { return f.values; }
+template <>
+const float* Values<float>(const SupernodalView& f) { return f.float_values; }
 
 // Row-major blocks of R right-hand sides are handled as one vector per row (GCC vector
 // extensions): every buffer they touch starts at a 32-byte boundary (see Aligned).
@@ -48,7 +58,7 @@ double* Aligned(std::vector<double>* storage, std::size_t size) {
 // the supernode up to `direct_rows` (counted from the supernode's first row) are updated in y;
 // the others are accumulated in `deferred` (indexed by deferred_index[row]), so that two
 // threads can work on disjoint subtrees.
-template <typename V>
+template <typename V, typename T>
 inline __attribute__((always_inline)) void ForwardSupernodeT(const SupernodalView& f, int s, double* y_data,
                                                               double* acc_data, int direct_rows,
                                                               double* deferred_data, const int* deferred_index) {
@@ -56,30 +66,31 @@ inline __attribute__((always_inline)) void ForwardSupernodeT(const SupernodalVie
   V* acc = reinterpret_cast<V*>(acc_data);
   const int k1 = f.first_col[s], num_cols = f.first_col[s + 1] - k1;
   const int num_rows = f.row_start[s + 1] - f.row_start[s];
-  const double* block = f.values + f.value_start[s];
+  const T* block = Values<T>(f) + f.value_start[s];
+  const double* inverse_diagonal = f.inverse_diagonal + k1;
   V* yd = y + k1;
   for (int j = 0; j < num_cols; ++j) {
-    const double* col = block + static_cast<std::size_t>(j) * num_rows;
-    const V xj = yd[j] / col[j];
+    const T* col = block + static_cast<std::size_t>(j) * num_rows;
+    const V xj = yd[j] * inverse_diagonal[j];
     yd[j] = xj;
     for (int i = j + 1; i < num_cols; ++i) yd[i] -= col[i] * xj;
   }
   const int below = num_rows - num_cols;
   if (below == 0) return;
   {
-    const double* col = block + num_cols;
+    const T* col = block + num_cols;
     const V xj = yd[0];
     for (int i = 0; i < below; ++i) acc[i] = col[i] * xj;
   }
   int j = 1;
   for (; j + 1 < num_cols; j += 2) {  // two columns per pass over acc
-    const double* col0 = block + static_cast<std::size_t>(j) * num_rows + num_cols;
-    const double* col1 = col0 + num_rows;
+    const T* col0 = block + static_cast<std::size_t>(j) * num_rows + num_cols;
+    const T* col1 = col0 + num_rows;
     const V x0 = yd[j], x1 = yd[j + 1];
     for (int i = 0; i < below; ++i) acc[i] += col0[i] * x0 + col1[i] * x1;
   }
   if (j < num_cols) {
-    const double* col = block + static_cast<std::size_t>(j) * num_rows + num_cols;
+    const T* col = block + static_cast<std::size_t>(j) * num_rows + num_cols;
     const V xj = yd[j];
     for (int i = 0; i < below; ++i) acc[i] += col[i] * xj;
   }
@@ -91,24 +102,24 @@ inline __attribute__((always_inline)) void ForwardSupernodeT(const SupernodalVie
 }
 
 // Backward substitution (L^T) with supernode s on x (n x R, row-major); `gathered` is scratch.
-template <typename V>
+template <typename V, typename T>
 inline __attribute__((always_inline)) void BackwardSupernodeT(const SupernodalView& f, int s, double* x_data,
                                                                double* gathered_data) {
   V* x = reinterpret_cast<V*>(x_data);
   V* gathered = reinterpret_cast<V*>(gathered_data);
   const int k1 = f.first_col[s], num_cols = f.first_col[s + 1] - k1;
   const int num_rows = f.row_start[s + 1] - f.row_start[s];
-  const double* block = f.values + f.value_start[s];
+  const T* block = Values<T>(f) + f.value_start[s];
   const int* rows = f.rows + f.row_start[s] + num_cols;
   const int below = num_rows - num_cols;
   for (int i = 0; i < below; ++i) gathered[i] = x[rows[i]];
   V* xd = x + k1;
   const V zero = xd[0] * 0.0;
   for (int j = num_cols - 1; j >= 0; --j) {
-    const double* col = block + static_cast<std::size_t>(j) * num_rows;
+    const T* col = block + static_cast<std::size_t>(j) * num_rows;
     // Four partial sums keep the multiply-adds independent.
     V sum0 = zero, sum1 = zero, sum2 = zero, sum3 = zero;
-    const double* col_below = col + num_cols;
+    const T* col_below = col + num_cols;
     int i = 0;
     for (; i + 3 < below; i += 4) {
       sum0 += col_below[i] * gathered[i];
@@ -123,39 +134,44 @@ inline __attribute__((always_inline)) void BackwardSupernodeT(const SupernodalVi
       sum2 += col[i + 1] * xd[i + 1];
     }
     if (i < num_cols) sum3 += col[i] * xd[i];
-    xd[j] = (xd[j] - ((sum0 + sum1) + (sum2 + sum3))) / col[j];
+    xd[j] = (xd[j] - ((sum0 + sum1) + (sum2 + sum3))) * f.inverse_diagonal[k1 + j];
   }
 }
 
 // The kernels for 1, 2 and 4 interleaved right-hand sides (3 is padded to 4), compiled for AVX2
 // as well as the baseline instruction set.
-#define CONFLUENT_SOLVE_KERNELS(R, V)                                                                     \
-  __attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardSupernode##R(                    \
+#define CONFLUENT_SOLVE_KERNELS(R, V, T, SUFFIX)                                                          \
+  __attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardSupernode##R##SUFFIX(            \
       const SupernodalView& f, int s, double* y, double* acc, int direct_rows, double* deferred,          \
       const int* deferred_index) {                                                                       \
-    ForwardSupernodeT<V>(f, s, y, acc, direct_rows, deferred, deferred_index);                            \
+    ForwardSupernodeT<V, T>(f, s, y, acc, direct_rows, deferred, deferred_index);                         \
   }                                                                                                      \
-  __attribute__((target_clones("arch=x86-64-v3", "default"))) void BackwardSupernode##R(                   \
+  __attribute__((target_clones("arch=x86-64-v3", "default"))) void BackwardSupernode##R##SUFFIX(           \
       const SupernodalView& f, int s, double* x, double* gathered) {                                     \
-    BackwardSupernodeT<V>(f, s, x, gathered);                                                             \
+    BackwardSupernodeT<V, T>(f, s, x, gathered);                                                          \
   }
-CONFLUENT_SOLVE_KERNELS(1, double)
-CONFLUENT_SOLVE_KERNELS(2, Vec2)
-CONFLUENT_SOLVE_KERNELS(4, Vec4)
+CONFLUENT_SOLVE_KERNELS(1, double, double, d)
+CONFLUENT_SOLVE_KERNELS(2, Vec2, double, d)
+CONFLUENT_SOLVE_KERNELS(4, Vec4, double, d)
+CONFLUENT_SOLVE_KERNELS(1, double, float, f)
+CONFLUENT_SOLVE_KERNELS(2, Vec2, float, f)
+CONFLUENT_SOLVE_KERNELS(4, Vec4, float, f)
 #undef CONFLUENT_SOLVE_KERNELS
 
 template <int R>
 void ForwardSupernode(const SupernodalView& f, int s, double* y, double* acc, int direct_rows, double* deferred,
                       const int* deferred_index) {
-  if constexpr (R == 1) ForwardSupernode1(f, s, y, acc, direct_rows, deferred, deferred_index);
-  else if constexpr (R == 2) ForwardSupernode2(f, s, y, acc, direct_rows, deferred, deferred_index);
-  else ForwardSupernode4(f, s, y, acc, direct_rows, deferred, deferred_index);
+  const bool single = f.float_values != nullptr;
+  if constexpr (R == 1) (single ? ForwardSupernode1f : ForwardSupernode1d)(f, s, y, acc, direct_rows, deferred, deferred_index);
+  else if constexpr (R == 2) (single ? ForwardSupernode2f : ForwardSupernode2d)(f, s, y, acc, direct_rows, deferred, deferred_index);
+  else (single ? ForwardSupernode4f : ForwardSupernode4d)(f, s, y, acc, direct_rows, deferred, deferred_index);
 }
 template <int R>
 void BackwardSupernode(const SupernodalView& f, int s, double* x, double* gathered) {
-  if constexpr (R == 1) BackwardSupernode1(f, s, x, gathered);
-  else if constexpr (R == 2) BackwardSupernode2(f, s, x, gathered);
-  else BackwardSupernode4(f, s, x, gathered);
+  const bool single = f.float_values != nullptr;
+  if constexpr (R == 1) (single ? BackwardSupernode1f : BackwardSupernode1d)(f, s, x, gathered);
+  else if constexpr (R == 2) (single ? BackwardSupernode2f : BackwardSupernode2d)(f, s, x, gathered);
+  else (single ? BackwardSupernode4f : BackwardSupernode4d)(f, s, x, gathered);
 }
 
 }  // namespace
@@ -170,9 +186,14 @@ struct SparseCholesky::Impl {
   std::string message;
   int n = 0;
   int threads = 1;
+  std::vector<int> permutation;  // of the factor (identity for a simplicial one)
+  HelperThread helper;           // the second thread of parallel solves
 
   // Supernodal solves.
   SupernodalView view;
+  std::vector<double> inverse_diagonal;
+  std::vector<float> float_values;  // with single precision: the factor rounded
+  bool single_precision = false;
   int max_rows = 0;
   // Two-thread schedule: per thread, subtrees as ranges [begin, end) of supernodes (a subtree
   // is contiguous in CHOLMOD's postorder); the supernodes above them run on one thread.
@@ -208,6 +229,7 @@ struct SparseCholesky::Impl {
     factor = nullptr;
     solution = work_y = work_e = nullptr;
     n = 0;
+    permutation.clear();
     view = {};
     parallel = false;
     for (auto& range : ranges) range.clear();
@@ -218,11 +240,33 @@ struct SparseCholesky::Impl {
   }
 
   void BuildView();
+  void BuildDiagonal();
   void BuildSchedule();
   template <int R>
   void SolvePermuted(double* y);
   void SolveRows(double* data, int k, int stride, int first);
 };
+
+// The inverse diagonal and, with single precision, the rounded values.
+void SparseCholesky::Impl::BuildDiagonal() {
+  float_values.clear();
+  float_values.shrink_to_fit();
+  view.float_values = nullptr;
+  if (single_precision) {
+    float_values.assign(view.values, view.values + view.value_start[view.count]);
+    view.float_values = float_values.data();
+  }
+  inverse_diagonal.resize(n);
+  for (int s = 0; s < view.count; ++s) {
+    const int num_rows = view.row_start[s + 1] - view.row_start[s];
+    for (int j = 0; j < view.first_col[s + 1] - view.first_col[s]; ++j) {
+      const std::size_t at = view.value_start[s] + static_cast<std::size_t>(j) * num_rows + j;
+      inverse_diagonal[view.first_col[s] + j] =
+          1.0 / (single_precision ? static_cast<double>(float_values[at]) : view.values[at]);
+    }
+  }
+  view.inverse_diagonal = inverse_diagonal.data();
+}
 
 void SparseCholesky::Impl::BuildView() {
   view.count = static_cast<int>(factor->nsuper);
@@ -231,6 +275,7 @@ void SparseCholesky::Impl::BuildView() {
   view.value_start = static_cast<const int*>(factor->px);
   view.rows = static_cast<const int*>(factor->s);
   view.values = static_cast<const double*>(factor->x);
+  BuildDiagonal();
   max_rows = 0;
   for (int s = 0; s < view.count; ++s) max_rows = std::max(max_rows, view.row_start[s + 1] - view.row_start[s]);
   direct_rows.resize(view.count);
@@ -343,11 +388,7 @@ void SparseCholesky::Impl::SolvePermuted(double* y) {
     for (auto range = ranges[t].rbegin(); range != ranges[t].rend(); ++range)
       for (int s = range->second - 1; s >= range->first; --s) BackwardSupernode<R>(view, s, y, scratch[t]);
   };
-  {
-    std::thread helper(forward, 1);
-    forward(0);
-    helper.join();
-  }
+  helper.Run(forward);
   for (std::size_t i = 0; i < top_columns.size(); ++i)
     for (int r = 0; r < R; ++r) {
       y[static_cast<std::size_t>(top_columns[i]) * R + r] -= deferred[0][i * R + r] + deferred[1][i * R + r];
@@ -355,11 +396,7 @@ void SparseCholesky::Impl::SolvePermuted(double* y) {
     }
   for (int s : top) ForwardSupernode<R>(view, s, y, scratch[0], direct_rows[s], nullptr, nullptr);
   for (auto s = top.rbegin(); s != top.rend(); ++s) BackwardSupernode<R>(view, *s, y, scratch[0]);
-  {
-    std::thread helper(backward, 1);
-    backward(0);
-    helper.join();
-  }
+  helper.Run(backward);
 }
 
 // Solves for columns [first, first + k) (k <= 4) of a row-major n x stride block, in place.
@@ -436,6 +473,10 @@ CholeskyStatus SparseCholesky::Factor(const Eigen::SparseMatrix<double>& matrix)
     return CholeskyStatus::kNumericalFailure;
   }
   s.n = n;
+  s.permutation.resize(n);
+  for (int i = 0; i < n; ++i) s.permutation[i] = i;
+  if (s.factor->is_super && s.factor->xtype == CHOLMOD_REAL && s.factor->itype == CHOLMOD_INT)
+    std::memcpy(s.permutation.data(), s.factor->Perm, sizeof(int) * n);
   // The supernodal factor is solved by the kernels above: CHOLMOD's own supernodal solve makes
   // one BLAS call per supernode, which dominates for the few right-hand sides of a frame.
   if (s.factor->is_super && s.factor->xtype == CHOLMOD_REAL && s.factor->itype == CHOLMOD_INT) s.BuildView();
@@ -456,6 +497,25 @@ void SparseCholesky::SolveRowMajor(double* data, int k) const {
   for (int i = 0; i < s.n; ++i)
     for (int r = 0; r < k; ++r) data[static_cast<std::size_t>(i) * k + r] = solved(i, r);
 }
+
+void SparseCholesky::SolvePermuted4(double* data) const {
+  Impl& s = *impl_;
+  if (s.factor == nullptr) std::abort();
+  if (s.view.count == 0) {  // the ordering is the identity here
+    SolveRowMajor(data, 4);
+    return;
+  }
+  if (reinterpret_cast<std::uintptr_t>(data) % 32 == 0) {
+    s.SolvePermuted<4>(data);
+    return;
+  }
+  const std::size_t size = static_cast<std::size_t>(s.n) * 4;
+  std::copy(data, data + size, s.permuted);
+  s.SolvePermuted<4>(s.permuted);
+  std::copy(s.permuted, s.permuted + size, data);
+}
+
+const std::vector<int>& SparseCholesky::permutation() const { return impl_->permutation; }
 
 Eigen::MatrixXd SparseCholesky::Solve(const Eigen::MatrixXd& rhs) const {
   Impl& s = *impl_;
@@ -481,6 +541,13 @@ Eigen::MatrixXd SparseCholesky::Solve(const Eigen::MatrixXd& rhs) const {
   Eigen::MatrixXd result(s.n, k);
   std::memcpy(result.data(), s.solution->x, sizeof(double) * s.n * k);
   return result;
+}
+
+void SparseCholesky::set_single_precision(bool single) {
+  Impl& s = *impl_;
+  if (s.single_precision == single) return;
+  s.single_precision = single;
+  if (s.view.count > 0) s.BuildDiagonal();
 }
 
 void SparseCholesky::set_threads(int threads) {

@@ -3,6 +3,9 @@
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <Eigen/SparseCore>
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,10 +14,10 @@
 #include <map>
 #include <queue>
 #include <stdexcept>
-#include <thread>
 
 #include "core/error.h"
 #include "deform/cholmod_solver.h"
+#include "deform/helper_thread.h"
 
 namespace confluent {
 
@@ -31,7 +34,6 @@ using RowMatrixX4d = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
 using Weights = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 Eigen::Vector4d ToVector(const Eigen::Quaterniond& q) { return Eigen::Vector4d(q.w(), q.x(), q.y(), q.z()); }
-Eigen::Quaterniond ToQuaternion(const Eigen::Vector4d& v) { return Eigen::Quaterniond(v(0), v(1), v(2), v(3)); }
 
 // Rotation that best maps triangle `from` onto triangle `to` (Kabsch: the rotation part of the
 // polar decomposition of the cross-covariance of centred corners plus the scaled normal).
@@ -60,25 +62,212 @@ bool TriangleRotation(const Eigen::Matrix3d& from, const Eigen::Matrix3d& to, Ei
   return true;
 }
 
-// Runs fn(begin, end, part) on `parts` contiguous parts of [0, count), one thread per part
-// (the calling thread takes part 0); below `min_count` items, one part.
+// Runs fn(begin, end, part) on the two halves of [0, count), part 1 on `helper`, when
+// `parallel`; else fn(0, count, 0).
 template <typename Function>
-void ForRanges(int count, int parts, int min_count, const Function& fn) {
-  if (parts <= 1 || count < min_count) {
+void ForHalves(HelperThread* helper, bool parallel, int count, const Function& fn) {
+  if (!parallel) {
     fn(0, count, 0);
     return;
   }
-  std::vector<std::thread> helpers;
-  for (int p = 1; p < parts; ++p)
-    helpers.emplace_back([&fn, count, parts, p] {
-      fn(static_cast<int>(static_cast<long>(count) * p / parts), static_cast<int>(static_cast<long>(count) * (p + 1) / parts), p);
-    });
-  fn(0, static_cast<int>(count / parts), 0);
-  for (std::thread& helper : helpers) helper.join();
+  helper->Run([&fn, count](int part) { fn(part == 0 ? 0 : count / 2, part == 0 ? count / 2 : count, part); });
 }
 
 // Below this many vertices or faces, a per-frame loop runs on one thread.
 constexpr int kMinParallelItems = 8192;
+
+// A buffer of at least `size` doubles starting at a 32-byte boundary, inside `storage`.
+double* Aligned32(std::vector<double>* storage, std::size_t size) {
+  if (storage->size() < size + 4) storage->assign(size + 4, 0.0);
+  const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(storage->data());
+  return storage->data() + ((32 - address % 32) % 32) / sizeof(double);
+}
+
+// Four doubles for GCC's vector extensions, at any 8-byte boundary.
+typedef double Vec4u __attribute__((vector_size(32), aligned(8)));
+
+// Rows [begin, end) of vertex_q (4 per row) = fields (num_fields per row) x field_q (num_fields x 4,
+// row-major).
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void MixFields(const double* fields, int num_fields,
+                                                                             const double* field_q, int begin,
+                                                                             int end, double* vertex_q) {
+  const Vec4u* q = reinterpret_cast<const Vec4u*>(field_q);
+  for (int v = begin; v < end; ++v) {
+    const double* w = fields + static_cast<std::size_t>(v) * num_fields;
+    // Four partial sums keep the multiply-adds independent.
+    Vec4u sum0 = q[0] * 0.0, sum1 = sum0, sum2 = sum0, sum3 = sum0;
+    int g = 0;
+    for (; g + 3 < num_fields; g += 4) {
+      sum0 += w[g] * q[g];
+      sum1 += w[g + 1] * q[g + 1];
+      sum2 += w[g + 2] * q[g + 2];
+      sum3 += w[g + 3] * q[g + 3];
+    }
+    for (; g < num_fields; ++g) sum0 += w[g] * q[g];
+    *reinterpret_cast<Vec4u*>(vertex_q + 4 * static_cast<std::size_t>(v)) = (sum0 + sum1) + (sum2 + sum3);
+  }
+}
+
+// Step 5 of Deform() for faces in blocks of kFaceBlock slots: per face, the rotation (normalised
+// sum of the corner quaternions) into face_q, and its flux into rhs (4 doubles per row, the last
+// unused).
+constexpr int kFaceBlock = 8;
+struct FaceAssembly {
+  int num_faces = 0;
+  const int* face = nullptr;           // per slot (the order faces are visited in), the face
+  const int* corners = nullptr;        // 3 per slot: rows of vertex_q and rhs
+  // Per block of kFaceBlock slots: g0 x, y, z and g1 x, y, z (kFaceBlock each); corner 0 gets
+  // R g0, corner 1 R g1 and corner 2 -R (g0 + g1). Padded with zeros.
+  const double* flux_edges = nullptr;
+  const double* vertex_q = nullptr;    // 4 per row
+  const double* previous = nullptr;    // 4 per face: previous rotations, or null
+  const double* intermediate = nullptr;  // 4 per face: the intermediate reference's, or null
+};
+
+// One slot of AssembleFaces; returns 1 when the interpolated quaternion vanished, else 0.
+inline int AssembleSlot(const FaceAssembly& in, int slot, double* face_q, double* rhs) {
+  const int* corner = in.corners + 3 * static_cast<std::size_t>(slot);
+  const std::size_t f = in.face[slot];
+  const double* a = in.vertex_q + 4 * static_cast<std::size_t>(corner[0]);
+  const double* b = in.vertex_q + 4 * static_cast<std::size_t>(corner[1]);
+  const double* c = in.vertex_q + 4 * static_cast<std::size_t>(corner[2]);
+  double q[4];
+  for (int k = 0; k < 4; ++k) q[k] = a[k] + b[k] + c[k];
+  const double squared = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  int vanishing = 0;
+  if (squared > 1e-18 && squared <= std::numeric_limits<double>::max()) {
+    const double inverse = 1.0 / std::sqrt(squared);
+    for (int k = 0; k < 4; ++k) q[k] *= inverse;
+    if (in.intermediate != nullptr) {
+      const double* r = in.intermediate + 4 * f;
+      const Eigen::Quaterniond composed =
+          (Eigen::Quaterniond(q[0], q[1], q[2], q[3]) * Eigen::Quaterniond(r[0], r[1], r[2], r[3])).normalized();
+      q[0] = composed.w(), q[1] = composed.x(), q[2] = composed.y(), q[3] = composed.z();
+    }
+  } else {
+    vanishing = 1;
+    const double identity[4] = {1.0, 0.0, 0.0, 0.0};
+    const double* keep = in.previous != nullptr ? in.previous + 4 * f : identity;
+    for (int k = 0; k < 4; ++k) q[k] = keep[k];
+  }
+  for (int k = 0; k < 4; ++k) face_q[4 * f + k] = q[k];
+  // u_j = R g_j with R the rotation matrix of the unit quaternion (w, x, y, z).
+  const double tx = 2 * q[1], ty = 2 * q[2], tz = 2 * q[3];
+  const double twx = tx * q[0], twy = ty * q[0], twz = tz * q[0];
+  const double txx = tx * q[1], txy = ty * q[1], txz = tz * q[1];
+  const double tyy = ty * q[2], tyz = tz * q[2], tzz = tz * q[3];
+  const double r[3][3] = {{1 - (tyy + tzz), txy - twz, txz + twy},
+                          {txy + twz, 1 - (txx + tzz), tyz - twx},
+                          {txz - twy, tyz + twx, 1 - (txx + tyy)}};
+  const double* g = in.flux_edges + 6 * static_cast<std::size_t>(slot / kFaceBlock) * kFaceBlock + slot % kFaceBlock;
+  double* y0 = rhs + 4 * static_cast<std::size_t>(corner[0]);
+  double* y1 = rhs + 4 * static_cast<std::size_t>(corner[1]);
+  double* y2 = rhs + 4 * static_cast<std::size_t>(corner[2]);
+  for (int k = 0; k < 3; ++k) {
+    const double u0 = r[k][0] * g[0] + r[k][1] * g[kFaceBlock] + r[k][2] * g[2 * kFaceBlock];
+    const double u1 = r[k][0] * g[3 * kFaceBlock] + r[k][1] * g[4 * kFaceBlock] + r[k][2] * g[5 * kFaceBlock];
+    y0[k] += u0;
+    y1[k] += u1;
+    y2[k] -= u0 + u1;
+  }
+  return vanishing;
+}
+
+// AssembleFaces, one slot at a time.
+int AssembleFacesGeneric(const FaceAssembly& in, int block_begin, int block_end, double* face_q, double* rhs) {
+  int vanishing = 0;
+  const int end = std::min(in.num_faces, block_end * kFaceBlock);
+  for (int slot = block_begin * kFaceBlock; slot < end; ++slot) vanishing += AssembleSlot(in, slot, face_q, rhs);
+  return vanishing;
+}
+
+#if defined(__x86_64__)
+// Rows i of the 4 x 4 block (a, b, c, d) become the columns (and back).
+__attribute__((target("avx2,fma"))) inline void Transpose4(__m256d* a, __m256d* b, __m256d* c, __m256d* d) {
+  const __m256d t0 = _mm256_unpacklo_pd(*a, *b), t1 = _mm256_unpackhi_pd(*a, *b);
+  const __m256d t2 = _mm256_unpacklo_pd(*c, *d), t3 = _mm256_unpackhi_pd(*c, *d);
+  *a = _mm256_permute2f128_pd(t0, t2, 0x20);
+  *b = _mm256_permute2f128_pd(t1, t3, 0x20);
+  *c = _mm256_permute2f128_pd(t0, t2, 0x31);
+  *d = _mm256_permute2f128_pd(t1, t3, 0x31);
+}
+
+// AssembleFaces with AVX2, four slots per step (across faces); slots with a vanishing
+// quaternion, an intermediate reference or in a partial block go through AssembleSlot.
+__attribute__((target("avx2,fma"))) int AssembleFacesAvx2(const FaceAssembly& in, int block_begin, int block_end,
+                                                          double* face_q, double* rhs) {
+  int vanishing = 0;
+  const __m256d one = _mm256_set1_pd(1.0), tiny = _mm256_set1_pd(1e-18),
+                largest = _mm256_set1_pd(std::numeric_limits<double>::max()), zero = _mm256_setzero_pd();
+  for (int block = block_begin; block < block_end; ++block) {
+    const int first = block * kFaceBlock;
+    if (first + kFaceBlock > in.num_faces || in.intermediate != nullptr) {
+      vanishing += AssembleFacesGeneric(in, block, block + 1, face_q, rhs);
+      continue;
+    }
+    for (int half = 0; half < kFaceBlock; half += 4) {
+      const int base = first + half;
+      const int* corner = in.corners + 3 * static_cast<std::size_t>(base);
+      __m256d q[4];
+      for (int l = 0; l < 4; ++l)
+        q[l] = _mm256_add_pd(_mm256_add_pd(_mm256_loadu_pd(in.vertex_q + 4 * static_cast<std::size_t>(corner[3 * l])),
+                                           _mm256_loadu_pd(in.vertex_q + 4 * static_cast<std::size_t>(corner[3 * l + 1]))),
+                             _mm256_loadu_pd(in.vertex_q + 4 * static_cast<std::size_t>(corner[3 * l + 2])));
+      Transpose4(&q[0], &q[1], &q[2], &q[3]);  // now w, x, y, z of the four slots
+      __m256d squared = _mm256_mul_pd(q[0], q[0]);
+      for (int k = 1; k < 4; ++k) squared = _mm256_fmadd_pd(q[k], q[k], squared);
+      const __m256d valid =
+          _mm256_and_pd(_mm256_cmp_pd(squared, tiny, _CMP_GT_OQ), _mm256_cmp_pd(squared, largest, _CMP_LE_OQ));
+      if (_mm256_movemask_pd(valid) != 0xF) {
+        for (int l = 0; l < 4; ++l) vanishing += AssembleSlot(in, base + l, face_q, rhs);
+        continue;
+      }
+      const __m256d inverse = _mm256_div_pd(one, _mm256_sqrt_pd(squared));
+      const __m256d w = _mm256_mul_pd(q[0], inverse), x = _mm256_mul_pd(q[1], inverse),
+                    y = _mm256_mul_pd(q[2], inverse), z = _mm256_mul_pd(q[3], inverse);
+      __m256d rows[4] = {w, x, y, z};
+      Transpose4(&rows[0], &rows[1], &rows[2], &rows[3]);
+      for (int l = 0; l < 4; ++l) _mm256_storeu_pd(face_q + 4 * static_cast<std::size_t>(in.face[base + l]), rows[l]);
+      const __m256d tx = _mm256_add_pd(x, x), ty = _mm256_add_pd(y, y), tz = _mm256_add_pd(z, z);
+      const __m256d twx = _mm256_mul_pd(tx, w), twy = _mm256_mul_pd(ty, w), twz = _mm256_mul_pd(tz, w);
+      const __m256d txx = _mm256_mul_pd(tx, x), txy = _mm256_mul_pd(ty, x), txz = _mm256_mul_pd(tz, x);
+      const __m256d tyy = _mm256_mul_pd(ty, y), tyz = _mm256_mul_pd(tz, y), tzz = _mm256_mul_pd(tz, z);
+      const __m256d r[3][3] = {
+          {_mm256_sub_pd(one, _mm256_add_pd(tyy, tzz)), _mm256_sub_pd(txy, twz), _mm256_add_pd(txz, twy)},
+          {_mm256_add_pd(txy, twz), _mm256_sub_pd(one, _mm256_add_pd(txx, tzz)), _mm256_sub_pd(tyz, twx)},
+          {_mm256_sub_pd(txz, twy), _mm256_add_pd(tyz, twx), _mm256_sub_pd(one, _mm256_add_pd(txx, tyy))}};
+      const double* g = in.flux_edges + 6 * static_cast<std::size_t>(block) * kFaceBlock + half;
+      __m256d u[3][4];  // per corner: x, y, z, 0 of the four slots
+      for (int j = 0; j < 2; ++j) {
+        const __m256d gx = _mm256_loadu_pd(g + (3 * j) * kFaceBlock), gy = _mm256_loadu_pd(g + (3 * j + 1) * kFaceBlock),
+                      gz = _mm256_loadu_pd(g + (3 * j + 2) * kFaceBlock);
+        for (int k = 0; k < 3; ++k)
+          u[j][k] = _mm256_fmadd_pd(r[k][0], gx, _mm256_fmadd_pd(r[k][1], gy, _mm256_mul_pd(r[k][2], gz)));
+        u[j][3] = zero;
+      }
+      for (int k = 0; k < 3; ++k) u[2][k] = _mm256_sub_pd(zero, _mm256_add_pd(u[0][k], u[1][k]));
+      u[2][3] = zero;
+      for (int j = 0; j < 3; ++j) Transpose4(&u[j][0], &u[j][1], &u[j][2], &u[j][3]);  // now per slot
+      for (int l = 0; l < 4; ++l)
+        for (int j = 0; j < 3; ++j) {
+          double* out = rhs + 4 * static_cast<std::size_t>(corner[3 * l + j]);
+          _mm256_store_pd(out, _mm256_add_pd(_mm256_load_pd(out), u[j][l]));
+        }
+    }
+  }
+  return vanishing;
+}
+#endif
+
+// Step 5 of Deform() for the slots of blocks [block_begin, block_end); rhs is 32-byte aligned.
+// Returns the number of faces whose interpolated quaternion vanished.
+int AssembleFaces(const FaceAssembly& in, int block_begin, int block_end, double* face_q, double* rhs) {
+#if defined(__x86_64__)
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+    return AssembleFacesAvx2(in, block_begin, block_end, face_q, rhs);
+#endif
+  return AssembleFacesGeneric(in, block_begin, block_end, face_q, rhs);
+}
 
 Eigen::Matrix3d Corners(const RowMatrixX3d& vertices, const RowMatrixX3i& faces, int f) {
   Eigen::Matrix3d corners;
@@ -94,7 +283,8 @@ struct DirichletSystem {
   SparseCholesky factor;                        // of L_ff; empty when every vertex is constrained
 
   // Returns false (with factor.message()) when L_ff cannot be factored.
-  bool Factor(const Eigen::SparseMatrix<double>& laplacian, const std::vector<int>& constrained_vertices, int threads) {
+  bool Factor(const Eigen::SparseMatrix<double>& laplacian, const std::vector<int>& constrained_vertices, int threads,
+              bool single_precision) {
     const int n = static_cast<int>(laplacian.rows());
     constrained = constrained_vertices;
     free_vertices.clear();
@@ -123,17 +313,19 @@ struct DirichletSystem {
     factor = SparseCholesky();
     if (num_free > 0 && factor.Factor(l_ff) != CholeskyStatus::kOk) return false;
     factor.set_threads(threads);
+    factor.set_single_precision(single_precision);
     return true;
   }
 
   // Fills `field` (n x k) with the harmonic interpolation of `values` (n_c x k) given at the
-  // constrained vertices.
+  // constrained vertices; vertex v goes to row row_of[v] (row v when row_of is null).
   template <typename Field>
-  void Solve(const Eigen::MatrixXd& values, Field* field) const {
-    for (std::size_t i = 0; i < constrained.size(); ++i) field->row(constrained[i]) = values.row(i);
+  void Solve(const Eigen::MatrixXd& values, Field* field, const std::vector<int>* row_of = nullptr) const {
+    auto row = [&](int v) { return row_of != nullptr ? (*row_of)[v] : v; };
+    for (std::size_t i = 0; i < constrained.size(); ++i) field->row(row(constrained[i])) = values.row(i);
     if (free_vertices.empty()) return;
     const Eigen::MatrixXd at_free = factor.Solve(Eigen::MatrixXd(minus_l_fc * values));
-    for (std::size_t i = 0; i < free_vertices.size(); ++i) field->row(free_vertices[i]) = at_free.row(i);
+    for (std::size_t i = 0; i < free_vertices.size(); ++i) field->row(row(free_vertices[i])) = at_free.row(i);
   }
 };
 
@@ -163,8 +355,6 @@ struct ConfluentMotion::Impl {
   RowMatrixX3d scan_vertices;
   RowMatrixX3i scan_faces;
   Weights weights;                      // half cotangents per face corner
-  // Per face, for k = 0..2: weights(f, k) * (x_{k+1} - x_{k+2}) in the reference pose.
-  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> face_edges;
   std::vector<int> component_of_vertex, component_of_face;
   int num_components = 0;
   std::vector<int> unreferenced;        // vertices used by no face
@@ -186,13 +376,23 @@ struct ConfluentMotion::Impl {
   std::vector<PathVertex> path_vertices;
   std::vector<std::vector<int>> path_vertices_at;  // per extra constrained vertex: path_vertices ids
   DirichletSystem path_harmonic;
-  // Segment weight fields (n x s), when all pairs are labelled.
+  // Segment weight fields (n x s, rows in the Poisson factor's ordering), when all pairs are labelled.
   std::vector<int> segment_of_pair;
   int num_segments = 0;
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> segment_fields;
   // Poisson system.
   SparseCholesky poisson;
   double position_weight = 0.0;  // absolute weight of the soft positional constraints
+  // The per-frame arrays over vertices are in the Poisson factor's ordering: vertex v is row
+  // row_of_vertex[v] (vertex_of_row is the inverse), so the right-hand side is assembled where
+  // the triangular solves read it.
+  std::vector<int> row_of_vertex, vertex_of_row;
+  // Faces are visited in slots sorted by their first row, so that the rows they touch are near
+  // each other in memory.
+  std::vector<int> face_of_slot;
+  std::vector<int> face_rows;        // per slot, its face's corners' rows
+  std::vector<double> flux_edges;    // per block of slots: g0, g1 of FaceAssembly
+  HelperThread helper;               // second thread of the per-frame loops
   // Frame state.
   int frame = 0;
   bool has_previous = false;
@@ -201,10 +401,12 @@ struct ConfluentMotion::Impl {
   std::vector<Eigen::Vector4d> previous_constraints;  // aligned, relative to the active reference
   std::vector<Eigen::Vector4d> previous_full;  // aligned, relative to the reference pose
   int previous_reference = -2;             // active reference of the previous frame
-  // Per-frame buffers, kept to avoid allocations: vertex quaternions and, per extra thread, a
-  // right-hand side of its own.
+  // Per-frame buffers, kept to avoid allocations: vertex quaternions (by row), the right-hand
+  // side (n x 4, 32-byte aligned, for the solve in place) and the helper thread's part of it,
+  // and the face rotations being computed.
   RowMatrixX4d vertex_q;
-  std::vector<RowMatrixX3d> partial_rhs;
+  std::vector<double> rhs_storage, partial_storage;
+  RowMatrixX4d next_face_rotations;
   // Intermediate reference (report section 4.3).
   int intermediate_frame = -1;
   RowMatrixX3d intermediate_template;
@@ -289,7 +491,7 @@ struct ConfluentMotion::Impl {
     if (extra.empty()) return 0;
     std::vector<int> all = harmonic.constrained;
     all.insert(all.end(), extra.begin(), extra.end());
-    if (!path_harmonic.Factor(laplacian, all, options.threads)) {
+    if (!path_harmonic.Factor(laplacian, all, options.threads, options.single_precision_solves)) {
       warnings->push_back("the harmonic system with SLERP path constraints cannot be factored: " +
                           path_harmonic.factor.message());
       path_vertices.clear();
@@ -425,12 +627,6 @@ ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_referenc
 
   // Laplacian; vertices used by no face get a unit diagonal so both systems stay definite.
   s.weights = CotangentWeights(s.scan_vertices, s.scan_faces, options.laplacian);
-  s.face_edges.resize(scan.num_faces(), 9);
-  for (int f = 0; f < scan.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k)
-      s.face_edges.block<1, 3>(f, 3 * k) =
-          s.weights(f, k) * (s.scan_vertices.row(s.scan_faces(f, (k + 1) % 3)) -
-                             s.scan_vertices.row(s.scan_faces(f, (k + 2) % 3)));
   Eigen::SparseMatrix<double> laplacian = AssembleLaplacian(n, s.scan_faces, s.weights);
   {
     std::vector<Eigen::Triplet<double>> diagonal;
@@ -461,34 +657,11 @@ ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_referenc
     s.average.setFromTriplets(entries.begin(), entries.end());
   }
   s.setup.num_constrained_vertices = static_cast<int>(constrained.size());
-  if (!s.harmonic.Factor(laplacian, constrained, options.threads))
+  if (!s.harmonic.Factor(laplacian, constrained, options.threads, options.single_precision_solves))
     throw InputError(scan_source, "the harmonic interpolation system cannot be factored: " +
                                       s.harmonic.factor.message());
   s.setup.harmonic_factor_nonzeros = s.harmonic.factor.factor_nonzeros();
   if (options.slerp_paths) s.laplacian = laplacian;
-
-  // Segment weight fields: the harmonic field is linear in the per-segment quaternions.
-  if (options.segment_fields) {
-    std::map<std::string, int> segment_id;
-    bool all_labelled = true;
-    for (const CorrespondencePair& pair : s.pairs) {
-      if (pair.segment.empty()) all_labelled = false;
-      segment_id.emplace(pair.segment, static_cast<int>(segment_id.size()));
-    }
-    if (all_labelled && static_cast<int>(segment_id.size()) <= options.max_segment_fields) {
-      s.num_segments = static_cast<int>(segment_id.size());
-      Eigen::SparseMatrix<double> indicator(m, s.num_segments);
-      std::vector<Eigen::Triplet<double>> entries;
-      for (int k = 0; k < m; ++k) {
-        s.segment_of_pair.push_back(segment_id.at(s.pairs[k].segment));
-        entries.emplace_back(k, s.segment_of_pair.back(), 1.0);
-      }
-      indicator.setFromTriplets(entries.begin(), entries.end());
-      s.segment_fields.resize(n, s.num_segments);
-      s.harmonic.Solve(Eigen::MatrixXd(s.average * indicator), &s.segment_fields);
-      s.setup.num_segment_fields = s.num_segments;
-    }
-  }
 
   // Poisson system: L plus the soft positional constraints, or, without them, L with one vertex
   // per component pinned (the right-hand side sums to zero over each component, so the pin only
@@ -515,8 +688,68 @@ ConfluentMotion::ConfluentMotion(const Mesh& scan, const Mesh& template_referenc
     if (s.poisson.Factor(laplacian + pin) != CholeskyStatus::kOk)
       throw InputError(scan_source, "the Poisson system cannot be factored: " + s.poisson.message());
     s.poisson.set_threads(options.threads);
+    s.poisson.set_single_precision(options.single_precision_solves && options.position_weight > 0.0);
     s.setup.poisson_factor_nonzeros = s.poisson.factor_nonzeros();
   }
+
+  // The per-frame layout: vertices in the Poisson factor's ordering; per face, its corners'
+  // rows and the flux edges g_j, with weights(f, k) * (x_{k+1} - x_{k+2}) added to corner k + 1
+  // and subtracted from corner k + 2 after rotation: g_0 = e_2 - e_1, g_1 = e_0 - e_2 and
+  // g_2 = e_1 - e_0 = -(g_0 + g_1).
+  s.vertex_of_row = s.poisson.permutation();
+  s.row_of_vertex.assign(n, 0);
+  for (int i = 0; i < n; ++i) s.row_of_vertex[s.vertex_of_row[i]] = i;
+  {
+    const int num_faces = scan.num_faces();
+    std::vector<int> first_row(num_faces);
+    for (int f = 0; f < num_faces; ++f)
+      first_row[f] = std::min({s.row_of_vertex[s.scan_faces(f, 0)], s.row_of_vertex[s.scan_faces(f, 1)],
+                               s.row_of_vertex[s.scan_faces(f, 2)]});
+    s.face_of_slot.resize(num_faces);
+    for (int f = 0; f < num_faces; ++f) s.face_of_slot[f] = f;
+    std::stable_sort(s.face_of_slot.begin(), s.face_of_slot.end(),
+                     [&](int a, int b) { return first_row[a] < first_row[b]; });
+    s.face_rows.resize(3 * static_cast<std::size_t>(num_faces));
+    const int num_blocks = (num_faces + kFaceBlock - 1) / kFaceBlock;
+    s.flux_edges.assign(6 * static_cast<std::size_t>(num_blocks) * kFaceBlock, 0.0);
+    for (int slot = 0; slot < num_faces; ++slot) {
+      const int f = s.face_of_slot[slot];
+      Eigen::Vector3d e[3];
+      for (int k = 0; k < 3; ++k) {
+        s.face_rows[3 * static_cast<std::size_t>(slot) + k] = s.row_of_vertex[s.scan_faces(f, k)];
+        e[k] = s.weights(f, k) * (s.scan_vertices.row(s.scan_faces(f, (k + 1) % 3)) -
+                                  s.scan_vertices.row(s.scan_faces(f, (k + 2) % 3))).transpose();
+      }
+      const Eigen::Vector3d g[2] = {e[2] - e[1], e[0] - e[2]};
+      double* block = &s.flux_edges[6 * static_cast<std::size_t>(slot / kFaceBlock) * kFaceBlock];
+      for (int j = 0; j < 2; ++j)
+        for (int c = 0; c < 3; ++c) block[(3 * j + c) * kFaceBlock + slot % kFaceBlock] = g[j](c);
+    }
+  }
+
+  // Segment weight fields: the harmonic field is linear in the per-segment quaternions.
+  if (options.segment_fields) {
+    std::map<std::string, int> segment_id;
+    bool all_labelled = true;
+    for (const CorrespondencePair& pair : s.pairs) {
+      if (pair.segment.empty()) all_labelled = false;
+      segment_id.emplace(pair.segment, static_cast<int>(segment_id.size()));
+    }
+    if (all_labelled && static_cast<int>(segment_id.size()) <= options.max_segment_fields) {
+      s.num_segments = static_cast<int>(segment_id.size());
+      Eigen::SparseMatrix<double> indicator(m, s.num_segments);
+      std::vector<Eigen::Triplet<double>> entries;
+      for (int k = 0; k < m; ++k) {
+        s.segment_of_pair.push_back(segment_id.at(s.pairs[k].segment));
+        entries.emplace_back(k, s.segment_of_pair.back(), 1.0);
+      }
+      indicator.setFromTriplets(entries.begin(), entries.end());
+      s.segment_fields.resize(n, s.num_segments);
+      s.harmonic.Solve(Eigen::MatrixXd(s.average * indicator), &s.segment_fields, &s.row_of_vertex);
+      s.setup.num_segment_fields = s.num_segments;
+    }
+  }
+
   s.setup.factor_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -626,12 +859,13 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
     q = align(relative, same ? &s.previous_constraints : nullptr);
   }
 
-  // 4. Harmonic interpolation of the 4 components (Dirichlet values at the constrained vertices).
-  const int threads = s.options.threads;
+  // 4. Harmonic interpolation of the 4 components (Dirichlet values at the constrained vertices),
+  // into vertex_q by row (the Poisson factor's ordering).
+  const bool threaded = s.options.threads > 1;
   RowMatrixX4d& vertex_q = s.vertex_q;
   vertex_q.resize(n, 4);
   bool use_fields = s.num_segments > 0 && summary.slerp_path_vertices == 0;
-  Eigen::Matrix<double, Eigen::Dynamic, 4> segment_q;
+  RowMatrixX4d segment_q;
   if (use_fields) {
     segment_q.setZero(s.num_segments, 4);
     for (int k = 0; k < m; ++k) segment_q.row(s.segment_of_pair[k]) += s.pairs[k].weight * q[k].transpose();
@@ -642,14 +876,14 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
   }
   summary.used_segment_fields = use_fields;
   if (use_fields) {
-    ForRanges(n, threads, kMinParallelItems, [&](int begin, int end, int) {
-      vertex_q.middleRows(begin, end - begin).noalias() = s.segment_fields.middleRows(begin, end - begin) * segment_q;
+    ForHalves(&s.helper, threaded && n >= kMinParallelItems, n, [&](int begin, int end, int) {
+      MixFields(s.segment_fields.data(), s.num_segments, segment_q.data(), begin, end, vertex_q.data());
     });
   } else {
     Eigen::MatrixXd constraint_q(m, 4);
     for (int k = 0; k < m; ++k) constraint_q.row(k) = q[k].transpose();
     if (summary.slerp_path_vertices == 0) {
-      s.harmonic.Solve(Eigen::MatrixXd(s.average * constraint_q), &vertex_q);
+      s.harmonic.Solve(Eigen::MatrixXd(s.average * constraint_q), &vertex_q, &s.row_of_vertex);
     } else {
       const int num_given = static_cast<int>(s.harmonic.constrained.size());
       Eigen::MatrixXd values(num_given + s.path_vertices_at.size(), 4);
@@ -662,53 +896,42 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
         }
         values.row(num_given + i) = sum.transpose() / s.path_vertices_at[i].size();
       }
-      s.path_harmonic.Solve(values, &vertex_q);
+      s.path_harmonic.Solve(values, &vertex_q, &s.row_of_vertex);
     }
   }
 
   // 5. Per-face rotation: normalised average of the corner quaternions (composed with the
   // intermediate reference's rotation), then the right-hand side U_reduced: the cotangent
   // Laplacian of the fragmented mesh of rotated reference triangles, summed per vertex. Faces
-  // are split over the threads; each thread sums into a right-hand side of its own.
-  RowMatrixX4d face_q(num_faces, 4);
-  RowMatrixX3d rhs = RowMatrixX3d::Zero(n, 3);
-  const int parts = num_faces >= kMinParallelItems ? threads : 1;
-  s.partial_rhs.resize(parts - 1);
-  for (RowMatrixX3d& partial : s.partial_rhs) partial.setZero(n, 3);
-  std::vector<int> vanishing_in(parts, 0);
-  ForRanges(num_faces, parts, kMinParallelItems, [&](int begin, int end, int part) {
-    RowMatrixX3d& out = part == 0 ? rhs : s.partial_rhs[part - 1];
-    int vanishing = 0;
-    for (int f = begin; f < end; ++f) {
-      const int* corner = &s.scan_faces(f, 0);
-      Eigen::Vector4d sum = (vertex_q.row(corner[0]) + vertex_q.row(corner[1]) + vertex_q.row(corner[2])).transpose();
-      const double norm = sum.norm();
-      const bool valid = norm > 1e-9 && std::isfinite(norm);
-      Eigen::Quaterniond rotation = valid ? ToQuaternion(sum / norm) : Eigen::Quaterniond::Identity();
-      if (!valid) {
-        ++vanishing;
-        if (s.has_previous) rotation = ToQuaternion(s.previous_face_rotations.row(f).transpose());
-      } else if (reference >= 0) {
-        rotation = (rotation * ToQuaternion(s.intermediate_face_rotations.row(f).transpose())).normalized();
-      }
-      face_q.row(f) = ToVector(rotation).transpose();
-      const Eigen::Matrix3d r = rotation.toRotationMatrix();
-      for (int k = 0; k < 3; ++k) {
-        // Flux of edge (k+1, k+2): half-cotangent weight times the rotated reference edge.
-        const Eigen::Vector3d flux = r * Eigen::Map<const Eigen::Vector3d>(&s.face_edges(f, 3 * k));
-        out.row(corner[(k + 1) % 3]) += flux.transpose();
-        out.row(corner[(k + 2) % 3]) -= flux.transpose();
-      }
-    }
-    vanishing_in[part] = vanishing;
+  // are split over the threads; the helper sums into a right-hand side of its own.
+  RowMatrixX4d& face_q = s.next_face_rotations;
+  face_q.resize(num_faces, 4);
+  double* rhs = Aligned32(&s.rhs_storage, 4 * static_cast<std::size_t>(n));
+  const bool split_faces = threaded && num_faces >= kMinParallelItems;
+  double* partial = split_faces ? Aligned32(&s.partial_storage, 4 * static_cast<std::size_t>(n)) : nullptr;
+  FaceAssembly assembly;
+  assembly.num_faces = num_faces;
+  assembly.face = s.face_of_slot.data();
+  assembly.corners = s.face_rows.data();
+  assembly.flux_edges = s.flux_edges.data();
+  assembly.vertex_q = vertex_q.data();
+  assembly.previous = s.has_previous ? s.previous_face_rotations.data() : nullptr;
+  assembly.intermediate = reference >= 0 ? s.intermediate_face_rotations.data() : nullptr;
+  int vanishing_in[2] = {0, 0};
+  const int num_blocks = (num_faces + kFaceBlock - 1) / kFaceBlock;
+  ForHalves(&s.helper, split_faces, num_blocks, [&](int begin, int end, int part) {
+    double* out = part == 0 ? rhs : partial;
+    std::fill(out, out + 4 * static_cast<std::size_t>(n), 0.0);
+    vanishing_in[part] = AssembleFaces(assembly, begin, end, face_q.data(), out);
   });
-  for (const RowMatrixX3d& partial : s.partial_rhs) rhs += partial;
-  int vanishing = 0;
-  for (int count : vanishing_in) vanishing += count;
+  if (split_faces)
+    for (std::size_t i = 0; i < 4 * static_cast<std::size_t>(n); ++i) rhs[i] += partial[i];
+  const int vanishing = vanishing_in[0] + vanishing_in[1];
   if (vanishing > 0)
     summary.warnings.push_back(std::to_string(vanishing) +
                                " faces got a vanishing interpolated quaternion (kept their previous rotation)");
-  for (int v : s.unreferenced) rhs.row(v).setZero();
+  for (int v : s.unreferenced)
+    for (int c = 0; c < 4; ++c) rhs[4 * static_cast<std::size_t>(s.row_of_vertex[v]) + c] = 0.0;
 
   // 6. Where the template's triangles carry the correspondence triangles: the scan-template
   // offset rotates with the template triangle.
@@ -724,12 +947,16 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
         const int v = s.scan_faces(s.pairs[k].scan_triangle, c);
         const Eigen::Vector3d corner_target =
             template_now[k] + full[k] * (s.scan_vertices.row(v).transpose() - s.template_centroid_ref[k]);
-        rhs.row(v) += (s.position_weight * s.pairs[k].weight) * corner_target.transpose();
+        Eigen::Map<Eigen::Vector3d>(rhs + 4 * static_cast<std::size_t>(s.row_of_vertex[v])) +=
+            (s.position_weight * s.pairs[k].weight) * corner_target;
       }
 
-  // 7. Solve L x = U_reduced (plus the positional terms) with the factor computed once.
-  RowMatrixX3d result = std::move(rhs);
-  s.poisson.SolveRowMajor(result.data(), 3);
+  // 7. Solve L x = U_reduced (plus the positional terms) with the factor computed once, in place.
+  s.poisson.SolvePermuted4(rhs);
+  auto solved = [&](int v) { return Eigen::Map<const Eigen::Vector3d>(rhs + 4 * static_cast<std::size_t>(s.row_of_vertex[v])); };
+  auto solved_centroid = [&](int f) {
+    return Eigen::Vector3d((solved(s.scan_faces(f, 0)) + solved(s.scan_faces(f, 1)) + solved(s.scan_faces(f, 2))) / 3.0);
+  };
 
   // 8. Global position: per component, the translation that best places the correspondence
   // centroids at their targets (zero up to round-off with positional constraints).
@@ -737,19 +964,23 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
   std::vector<double> weight(s.num_components, 0.0);
   Eigen::Vector3d mean_offset = Eigen::Vector3d::Zero();
   for (int k = 0; k < m; ++k) {
-    const Eigen::Vector3d scan_now = Corners(result, s.scan_faces, s.pairs[k].scan_triangle).colwise().mean().transpose();
+    const Eigen::Vector3d scan_now = solved_centroid(s.pairs[k].scan_triangle);
     const int c = s.component_of_face[s.pairs[k].scan_triangle];
     shift[c] += s.pairs[k].weight * (target[k] - scan_now);
     weight[c] += s.pairs[k].weight;
     mean_offset += (target[k] - s.scan_centroid_ref[k]) / m;
   }
   for (int c = 0; c < s.num_components; ++c) shift[c] /= weight[c];
+  RowMatrixX3d result(n, 3);
+  double non_finite = 0.0;  // becomes NaN when any coordinate is not finite
   for (int v = 0; v < n; ++v) {
     const int c = s.component_of_vertex[v];
-    if (c >= 0)
-      result.row(v) += shift[c].transpose();
-    else
-      result.row(v) = s.scan_vertices.row(v) + mean_offset.transpose();
+    const double* x = rhs + 4 * static_cast<std::size_t>(s.row_of_vertex[v]);
+    for (int j = 0; j < 3; ++j) {
+      const double value = c >= 0 ? x[j] + shift[c](j) : s.scan_vertices(v, j) + mean_offset(j);
+      result(v, j) = value;
+      non_finite += value - value;
+    }
   }
   double squared = 0.0;
   for (int k = 0; k < m; ++k) {
@@ -757,7 +988,7 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
     squared += (target[k] - scan_now).squaredNorm();
   }
   summary.placement_rms_m = std::sqrt(squared / m);
-  if (!result.allFinite()) {  // cannot happen with finite input; never hand out NaN
+  if (non_finite != 0.0) {  // cannot happen with finite input; never hand out NaN
     summary.warnings.push_back("non-finite result replaced by the reference pose");
     for (int v = 0; v < n; ++v)
       if (!result.row(v).allFinite()) result.row(v) = s.scan_vertices.row(v);
@@ -769,7 +1000,7 @@ RowMatrixX3d ConfluentMotion::Deform(const RowMatrixX3d& template_vertices, Defo
   s.previous_constraints = q;
   s.previous_full = full_q;
   s.previous_reference = reference;
-  s.previous_face_rotations.swap(face_q);
+  s.previous_face_rotations.swap(face_q);  // face_q is s.next_face_rotations
   ++s.frame;
   if (summary_out) *summary_out = summary;
   return result;

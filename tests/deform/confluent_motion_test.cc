@@ -128,6 +128,36 @@ TEST(ConfluentMotion, SegmentFieldsEqualTheGeneralSolve) {
   EXPECT_FALSE(a.used_segment_fields);
 }
 
+// A scan large enough for the two-thread loops and solves (and with a face count that is not a
+// multiple of the assembly's block): two threads and single-precision factors give the serial
+// double-precision result, frame after frame.
+TEST(ConfluentMotion, ThreadsAndSinglePrecisionAgreeWithSerialDouble) {
+  const Mesh template_mesh = testing::MakeTube(0.04, 0.6, 24, 12);
+  const Mesh scan = testing::MakeTube(0.045, 0.6, 200, 45, 0.13);
+  ASSERT_GE(scan.num_faces(), 16384);
+  ASSERT_NE(scan.num_faces() % 8, 0);
+  const Correspondences pairs = testing::TubePairs(template_mesh, scan, {0.1, 0.2, 0.4, 0.5}, 4, 0.04, 0.3);
+  ConfluentMotionOptions serial_double, two_single;
+  serial_double.threads = 1;
+  two_single.single_precision_solves = true;
+  ConfluentMotion reference(scan, template_mesh, pairs, serial_double), two(scan, template_mesh, pairs),
+      fast(scan, template_mesh, pairs, two_single);
+  for (int frame = 0; frame < 3; ++frame) {
+    RowMatrixX3d posed = testing::RotateAbove(
+        template_mesh.vertices, 0.3,
+        Eigen::AngleAxisd(0.4 * (frame + 1), Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix());
+    if (frame == 2)  // not segment-rigid: the harmonic solve per frame
+      posed.row(template_mesh.faces(pairs.pairs[0].template_triangle, 0)) += Eigen::RowVector3d(0.002, 0, 0);
+    DeformSummary a, b, c;
+    const RowMatrixX3d x = reference.Deform(posed, &a), y = two.Deform(posed, &b), z = fast.Deform(posed, &c);
+    EXPECT_EQ(a.used_segment_fields, frame < 2);
+    EXPECT_EQ(c.used_segment_fields, frame < 2);
+    EXPECT_LT((x - y).cwiseAbs().maxCoeff(), 1e-12) << "frame " << frame;
+    EXPECT_LT((x - z).cwiseAbs().maxCoeff(), 1e-5) << "frame " << frame;
+    EXPECT_LT((reference.face_rotations() - fast.face_rotations()).cwiseAbs().maxCoeff(), 1e-5) << "frame " << frame;
+  }
+}
+
 TEST(ConfluentMotion, MarkersNearTheJointBendSharper) {
   // Report Fig. 4: the bend is concentrated near the joint when the markers are close to it.
   const Mesh template_mesh = testing::MakeTube(0.04, 0.6, 24, 12);
