@@ -126,7 +126,7 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
     int heldout_n = 0;
     for (int c = 0; c < rig.size(); ++c) {
       if (masks[c].empty()) continue;
-      const Image rendered = RasterizeSilhouette(mesh, rig.cameras[c], 1);
+      const Image rendered = RasterizeClosedMesh(mesh, rig.cameras[c]);  // centre-sampled, like GL masks
       const double iou = MaskIoU(rendered, masks[c]);
       overlap_csv += std::to_string(frame) + "," + rig.cameras[c].name + "," + std::to_string(iou) + "," +
                      (excluded[c] ? "1" : "0") + "\n";

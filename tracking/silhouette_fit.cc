@@ -48,6 +48,39 @@ struct SilhouetteObservations::Impl {
   std::vector<PreparedView> views;
 };
 
+namespace {
+
+// The offset (reduced px) from the centre of contour pixel (x, y) to the silhouette's edge
+// nearby. Along each axis with exactly one background 4-neighbour, the edge lies where the
+// area coverage, linearly interpolated between the two pixel centres, crosses one half; the
+// offset is the foot of the perpendicular on the line through those axis crossings. Without it
+// the contour rays would run half a reduced pixel inside the silhouette and the template would
+// be fitted that much too thin.
+Eigen::Vector2d ContourEdgeOffset(const cv::Mat& coverage, const cv::Mat& binary, int x, int y) {
+  auto outside = [&](int xx, int yy) {
+    return xx < 0 || yy < 0 || xx >= binary.cols || yy >= binary.rows || !binary.at<uchar>(yy, xx);
+  };
+  auto value = [&](int xx, int yy) {
+    return xx < 0 || yy < 0 || xx >= binary.cols || yy >= binary.rows ? 0.0 : double(coverage.at<uchar>(yy, xx));
+  };
+  const double a = value(x, y);
+  double inv[2] = {0.0, 0.0};  // signed 1 / crossing distance per axis (0: no crossing)
+  for (int axis = 0; axis < 2; ++axis) {
+    const int dx = axis == 0, dy = axis == 1;
+    const bool plus = outside(x + dx, y + dy), minus = outside(x - dx, y - dy);
+    if (plus == minus) continue;
+    const int sign = plus ? 1 : -1;
+    const double b = value(x + sign * dx, y + sign * dy);
+    const double t = std::clamp((a - 127.5) / std::max(a - b, 1.0), 0.05, 1.0);
+    inv[axis] = sign / t;
+  }
+  const double norm2 = inv[0] * inv[0] + inv[1] * inv[1];
+  if (norm2 == 0.0) return Eigen::Vector2d::Zero();
+  return Eigen::Vector2d(inv[0], inv[1]) / norm2;
+}
+
+}  // namespace
+
 SilhouetteObservations::SilhouetteObservations(const Rig& rig, const std::vector<Image>& masks,
                                                const std::vector<bool>& use_camera, int downscale,
                                                int max_contour_points)
@@ -65,6 +98,7 @@ SilhouetteObservations::SilhouetteObservations(const Rig& rig, const std::vector
     view.rows = std::max(1, mask.height / factor);
     view.scale = static_cast<double>(mask.width) / view.cols;
     cv::resize(full, small, cv::Size(view.cols, view.rows), 0, 0, cv::INTER_AREA);
+    const cv::Mat coverage = small.clone();  // area fraction of foreground, 0..255
     cv::threshold(small, small, 127, 255, cv::THRESH_BINARY);
     cv::Mat inside, outside, not_small;
     cv::bitwise_not(small, not_small);
@@ -90,7 +124,8 @@ SilhouetteObservations::SilhouetteObservations(const Rig& rig, const std::vector
                             : 1.0;
     for (double i = 0; i < contour.size() && max_contour_points > 0; i += step) {
       const Eigen::Vector2i& p = contour[static_cast<std::size_t>(i)];
-      const Eigen::Vector2d pixel((p.x() + 0.5) * view.scale - 0.5, (p.y() + 0.5) * view.scale - 0.5);
+      const Eigen::Vector2d edge = ContourEdgeOffset(coverage, small, p.x(), p.y());
+      const Eigen::Vector2d pixel((p.x() + 0.5 + edge.x()) * view.scale - 0.5, (p.y() + 0.5 + edge.y()) * view.scale - 0.5);
       view.ray_origins.push_back(view.camera.center_in_world());
       view.ray_directions.push_back(view.camera.RayInWorld(pixel));
     }
@@ -151,7 +186,7 @@ struct SegmentCost {
     const T vs = (T(cam.K(1, 1)) * yd + T(cam.K(1, 2)) + T(0.5)) * T(inv_scale) - T(0.5);
     T sd;
     view->interpolator->Evaluate(vs, us, &sd);
-    return sd > T(-0.5) ? sd + T(0.5) : T(0.0);
+    return sd > T(0.0) ? sd : T(0.0);  // inside is free; an inward margin would fit the template thin
   }
 
   template <typename T>

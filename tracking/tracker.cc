@@ -37,6 +37,21 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// `camera` for an image reduced by `downscale` (the size DownscaleMask gives), with the same
+// pixel-centre convention: u' = (u + 0.5) * sx - 0.5.
+Camera ReducedCamera(const Camera& camera, int downscale) {
+  if (downscale <= 1) return camera;
+  Camera out = camera;
+  out.width = std::max(1, camera.width / downscale);
+  out.height = std::max(1, camera.height / downscale);
+  const double sx = static_cast<double>(out.width) / camera.width, sy = static_cast<double>(out.height) / camera.height;
+  out.K.row(0) *= sx;
+  out.K.row(1) *= sy;
+  out.K(0, 2) = (camera.K(0, 2) + 0.5) * sx - 0.5;
+  out.K(1, 2) = (camera.K(1, 2) + 0.5) * sy - 0.5;
+  return out;
+}
+
 std::size_t HashMask(const Image& mask) {
   return std::hash<std::string_view>()(std::string_view(reinterpret_cast<const char*>(mask.data.data()), mask.data.size()));
 }
@@ -150,7 +165,8 @@ void Tracker::Evaluate(const std::vector<Image>& masks, const std::vector<bool>&
     if (!use[c]) continue;
     const int factor = options_.iou_downscale > 0 ? options_.iou_downscale
                                                   : std::max(1, static_cast<int>(std::lround(masks[c].width / 256.0)));
-    const Image rendered = RasterizeSilhouette(mesh, rig_.cameras[c], factor);
+    // Centre-sampled, like the masks (a conservative fill would add half a reduced pixel all round).
+    const Image rendered = RasterizeClosedMesh(mesh, ReducedCamera(rig_.cameras[c], factor));
     const Image mask = DownscaleMask(masks[c], factor);
     if (mask.width != rendered.width || mask.height != rendered.height) continue;
     result->camera_iou[c] = MaskIoU(rendered, mask);
