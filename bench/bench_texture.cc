@@ -1,17 +1,20 @@
 // Speed of projective texturing (render/projective_texture.h): a 263K-triangle mesh textured
 // from 8 ring cameras (1024x768 images) and rendered into a 1024x768 novel view.
-//   BM_TextureSetFrame   per video frame: 8 depth maps, feather maps, uploads
-//   BM_TextureRender     per novel view: rasterise + blend + readback
+//   BM_TextureSetFrame   per video frame: 8 depth maps (of the default ~20K-face proxy), feather
+//                        maps, image copies
+//   BM_TextureRender     per novel view: G-buffer rasterisation + read-back + CPU blending
 //   BM_TextureFrame      both (one novel view per video frame, e.g. `confluent render`)
 //   BM_TextureFrame4Views  SetFrame + 4 novel views (e.g. a viewer or several output paths);
 //                          the time per view is a quarter of it
 //   BM_TextureSetFrameHalfVisibility  SetFrame with visibility_scale = 0.5 (depth and feather
 //                          maps at half resolution; not the default, it loses ~0.3 dB)
+//   BM_TextureSetFrameFullMesh  SetFrame with depth maps of the full mesh (visibility_faces = 0)
 // Read the *_median rows.
 
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <map>
 
 #include "core/mesh_ops.h"
 #include "render/projective_texture.h"
@@ -57,17 +60,16 @@ struct Fixture {
     texturer->SetFrame(mesh.vertices, cameras, images);
     texturer->Render(view);  // warm-up (shader compile, framebuffer)
   }
-  // The texturer with depth and feather maps at half resolution (made on first use).
-  ProjectiveTexturer& HalfVisibility() {
-    if (!half_visibility) {
-      ProjectiveTextureOptions options;
-      options.visibility_scale = 0.5;
-      half_visibility = std::make_unique<ProjectiveTexturer>(mesh, options);
-      half_visibility->SetFrame(mesh.vertices, cameras, images);
+  // A texturer with other options, made on first use and kept under `name`.
+  ProjectiveTexturer& Variant(const std::string& name, const ProjectiveTextureOptions& options) {
+    std::unique_ptr<ProjectiveTexturer>& texturer_of_name = variants[name];
+    if (!texturer_of_name) {
+      texturer_of_name = std::make_unique<ProjectiveTexturer>(mesh, options);
+      texturer_of_name->SetFrame(mesh.vertices, cameras, images);
     }
-    return *half_visibility;
+    return *texturer_of_name;
   }
-  std::unique_ptr<ProjectiveTexturer> half_visibility;
+  std::map<std::string, std::unique_ptr<ProjectiveTexturer>> variants;
 };
 
 // Never destroyed: tearing a GL context down from a static destructor can race the driver.
@@ -76,15 +78,21 @@ Fixture& GetFixture() {
   return *fixture;
 }
 
-void BM_TextureSetFrame(benchmark::State& state) {
+// SetFrame with the mesh shifted a little every iteration (new vertices each video frame).
+void SetFrameLoop(benchmark::State& state, ProjectiveTexturer& texturer) {
   Fixture& f = GetFixture();
   RowMatrixX3d moved = f.mesh.vertices;
   double offset = 0.0;
   for (auto _ : state) {
     offset = offset > 0.05 ? 0.0 : offset + 0.001;
     moved.col(0) = f.mesh.vertices.col(0).array() + offset;
-    f.texturer->SetFrame(moved, f.cameras, f.images);
+    texturer.SetFrame(moved, f.cameras, f.images);
   }
+}
+
+void BM_TextureSetFrame(benchmark::State& state) {
+  Fixture& f = GetFixture();
+  SetFrameLoop(state, *f.texturer);
   state.counters["triangles"] = static_cast<double>(f.mesh.num_faces());
   state.counters["cameras"] = static_cast<double>(f.cameras.size());
 }
@@ -122,15 +130,15 @@ void BM_TextureFrame4Views(benchmark::State& state) {
 }
 
 void BM_TextureSetFrameHalfVisibility(benchmark::State& state) {
-  Fixture& f = GetFixture();
-  ProjectiveTexturer& texturer = f.HalfVisibility();
-  RowMatrixX3d moved = f.mesh.vertices;
-  double offset = 0.0;
-  for (auto _ : state) {
-    offset = offset > 0.05 ? 0.0 : offset + 0.001;
-    moved.col(0) = f.mesh.vertices.col(0).array() + offset;
-    texturer.SetFrame(moved, f.cameras, f.images);
-  }
+  ProjectiveTextureOptions options;
+  options.visibility_scale = 0.5;
+  SetFrameLoop(state, GetFixture().Variant("half visibility", options));
+}
+
+void BM_TextureSetFrameFullMesh(benchmark::State& state) {
+  ProjectiveTextureOptions options;
+  options.visibility_faces = 0;
+  SetFrameLoop(state, GetFixture().Variant("full mesh", options));
 }
 
 #define CONFLUENT_TEXTURE_BENCH(name) \
@@ -141,6 +149,7 @@ CONFLUENT_TEXTURE_BENCH(BM_TextureRender);
 CONFLUENT_TEXTURE_BENCH(BM_TextureFrame);
 CONFLUENT_TEXTURE_BENCH(BM_TextureFrame4Views);
 CONFLUENT_TEXTURE_BENCH(BM_TextureSetFrameHalfVisibility);
+CONFLUENT_TEXTURE_BENCH(BM_TextureSetFrameFullMesh);
 
 }  // namespace
 }  // namespace confluent

@@ -1,17 +1,19 @@
-// ProjectiveTexturer: unstructured-lumigraph projective texturing with GL shaders.
+// ProjectiveTexturer: unstructured-lumigraph projective texturing; GL rasterises, the CPU blends.
 //
 // SetFrame draws every input camera's depth map (depth buffer only, all cameras before the first
 // read-back, so that llvmpipe bins one camera while it rasterises the previous; cameras with lens
 // distortion go through MeshRenderer for exact distortion), reads them back, and derives each
 // feather map on a worker thread (distance to the mesh outline, to depth discontinuities and to
-// the mask outline) while the next map is read. Images and (depth, feather) pairs are uploaded
-// as texture arrays. Render rasterises the mesh into a G-buffer (world point, face normal, base
-// colour) with a cheap shader, then runs the blending once per covered pixel, inside the mesh's
-// projected bounding box: each pixel projects its world point into every input camera
-// (distortion applied), tests visibility against the depth map (shadow-map style), keeps the
-// best k cameras and fetches only their colours. On a software rasteriser with many tiny
-// triangles this matters: a fragment shader runs per triangle on whole 4x4 pixel blocks, so the
-// expensive shader in the rasterisation pass cost several times the covered pixel count.
+// the mask outline) while the next map is read. The depth maps are drawn from a proxy of the mesh
+// (vertex clustering at construction, on the mesh's own vertices, so it follows them): on a
+// software rasteriser their cost is mostly per triangle, in llvmpipe's single-threaded setup.
+// Render rasterises the mesh into a G-buffer (world point, face normal, base colour) with a cheap
+// shader, reads the mesh's projected bounding box back, and blends on the CPU (all cores): each
+// covered pixel skips the cameras its surface faces away from, projects its world point into the
+// others (distortion applied), tests visibility against the depth map (shadow-map style), keeps
+// the best k cameras and samples only their images. A fragment shader on llvmpipe paid for every
+// test of every camera on every pixel (execution masks, no real branches) and was 2-3 times
+// slower.
 
 #include "render/projective_texture.h"
 #include "render/gl_program.h"
@@ -23,13 +25,16 @@
 #include <cmath>
 #include <cstring>
 #include <future>
-#include <map>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+#include <thread>
 
 #include "calib/capture.h"
 #include "core/cv_interop.h"
 #include "core/error.h"
+#include "core/mesh_ops.h"
 
 namespace confluent {
 namespace {
@@ -80,127 +85,6 @@ void main() {
 }
 )";
 
-
-// Pass 2 of Render: the blending, once per covered pixel of the G-buffer. See the header for the
-// weighting. Uniform arrays are indexed by input camera. BEST_K is defined at compile time, so
-// that the running best-(k+1) list below unrolls into registers (dynamically indexed local arrays
-// are very slow on llvmpipe). Colours are fetched for the k best cameras only, after the search.
-constexpr const char* kBlendFragmentShader = R"(
-#define MAX_CAMERAS 32
-#define SLOTS (BEST_K + 1)
-layout(location = 0) out vec4 out_color;
-uniform sampler2D g_position;
-uniform sampler2D g_normal;
-uniform sampler2D g_base;
-uniform int num_cameras;
-uniform mat3 cam_rotation[MAX_CAMERAS];
-uniform vec3 cam_translation[MAX_CAMERAS];
-uniform vec4 cam_intrinsics[MAX_CAMERAS];  // fx fy cx cy
-uniform float cam_skew[MAX_CAMERAS];
-uniform vec4 cam_dist[MAX_CAMERAS];        // k1 k2 p1 p2
-uniform float cam_k3[MAX_CAMERAS];
-uniform vec2 cam_size[MAX_CAMERAS];
-uniform vec3 cam_center[MAX_CAMERAS];
-uniform vec3 cam_gain[MAX_CAMERAS];
-uniform vec2 vis_scale[MAX_CAMERAS];  // depth-map pixels per image pixel, x and y
-uniform vec2 vis_size[MAX_CAMERAS];   // depth-map size
-uniform vec2 image_atlas_size;
-uniform vec2 depth_atlas_size;
-uniform sampler2DArray images;
-uniform sampler2DArray depth_feather;
-uniform vec3 view_center;
-uniform float depth_bias;
-uniform float resolution_weight;
-uniform float grazing_cos;
-
-void main() {
-  ivec2 pixel_in_view = ivec2(gl_FragCoord.xy);
-  vec4 g = texelFetch(g_position, pixel_in_view, 0);
-  if (g.w == 0.0) discard;  // background: stays transparent
-  vec3 X = g.xyz;
-  vec3 n = texelFetch(g_normal, pixel_in_view, 0).xyz;
-  vec3 to_view = view_center - X;
-  float view_distance = max(length(to_view), 1e-6);
-  to_view /= view_distance;
-
-  // The SLOTS smallest penalties so far, ascending, with their quality and texture coordinate
-  // (uv, camera layer).
-  float slot_penalty[SLOTS];
-  float slot_quality[SLOTS];
-  vec3 slot_uvl[SLOTS];
-  for (int s = 0; s < SLOTS; ++s) {
-    slot_penalty[s] = 1e30;
-    slot_quality[s] = 0.0;
-    slot_uvl[s] = vec3(0.0);
-  }
-  int count = 0;
-  for (int i = 0; i < num_cameras; ++i) {
-    vec3 p = cam_rotation[i] * X + cam_translation[i];
-    if (p.z <= 1e-6) continue;
-    vec2 xn = p.xy / p.z;
-    vec4 d = cam_dist[i];
-    float k3 = cam_k3[i];
-    if (d != vec4(0.0) || k3 != 0.0) {
-      float r2 = dot(xn, xn);
-      float radial = 1.0 + r2 * (d.x + r2 * (d.y + r2 * k3));
-      xn = vec2(xn.x * radial + 2.0 * d.z * xn.x * xn.y + d.w * (r2 + 2.0 * xn.x * xn.x),
-                xn.y * radial + d.z * (r2 + 2.0 * xn.y * xn.y) + 2.0 * d.w * xn.x * xn.y);
-    }
-    vec4 K = cam_intrinsics[i];
-    vec2 pixel = vec2(K.x * xn.x + cam_skew[i] * xn.y + K.z, K.y * xn.y + K.w);
-    vec2 size = cam_size[i];
-    if (pixel.x < -0.5 || pixel.y < -0.5 || pixel.x > size.x - 0.5 || pixel.y > size.y - 0.5) continue;
-    // Shadow-map test against the farthest of the 4 surrounding depth texels (lenient on slanted
-    // surfaces; occlusion edges are feathered anyway), feather from the nearest texel.
-    vec2 pixel_in_map = (pixel + 0.5) * vis_scale[i];  // texel centres at +0.5
-    vec4 depths = textureGather(depth_feather, vec3(pixel_in_map / depth_atlas_size, float(i)), 0);
-    float depth = max(max(depths.x, depths.y), max(depths.z, depths.w));
-    if (depth <= 0.0 || p.z > depth + depth_bias) continue;
-    ivec2 texel = clamp(ivec2(floor(pixel_in_map)), ivec2(0), ivec2(vis_size[i]) - 1);
-    float feather = texelFetch(depth_feather, ivec3(texel, i), 0).g;
-    if (feather <= 0.0) continue;
-    vec3 to_camera = cam_center[i] - X;
-    float camera_distance = length(to_camera);
-    to_camera /= camera_distance;
-    float facing = dot(n, to_camera);
-    if (facing <= 0.0) continue;
-    float q = feather;
-    if (grazing_cos > 0.0) q *= smoothstep(0.0, grazing_cos, facing);
-    if (q <= 0.0) continue;
-    // Angle between the rays: sqrt(2 - 2 cos) is the chord, within 5% of the angle below 60 deg.
-    float angle = sqrt(max(2.0 - 2.0 * dot(to_view, to_camera), 0.0));
-    float penalty = max(angle + resolution_weight * max(0.0, camera_distance - view_distance) / view_distance, 1e-4);
-    vec3 uvl = vec3((pixel + 0.5) / image_atlas_size, float(i));
-    ++count;
-    for (int s = 0; s < SLOTS; ++s) {  // insertion into the sorted slots
-      bool take = penalty < slot_penalty[s];
-      float kept_penalty = slot_penalty[s];
-      float kept_quality = slot_quality[s];
-      vec3 kept_uvl = slot_uvl[s];
-      slot_penalty[s] = take ? penalty : kept_penalty;
-      slot_quality[s] = take ? q : kept_quality;
-      slot_uvl[s] = take ? uvl : kept_uvl;
-      penalty = take ? kept_penalty : penalty;
-      q = take ? kept_quality : q;
-      uvl = take ? kept_uvl : uvl;
-    }
-  }
-
-  // Threshold t: the (k+1)-th smallest penalty, or pi when k or fewer cameras see X.
-  float threshold = count > BEST_K ? slot_penalty[BEST_K] : 3.14159265;
-  vec3 sum = vec3(0.0);
-  float total = 0.0;
-  for (int s = 0; s < BEST_K; ++s) {
-    float w = slot_penalty[s] < threshold ? (1.0 - slot_penalty[s] / threshold) / slot_penalty[s] * slot_quality[s] : 0.0;
-    if (w > 0.0) {
-      sum += w * textureLod(images, slot_uvl[s], 0.0).rgb * cam_gain[int(slot_uvl[s].z)];
-      total += w;
-    }
-  }
-  vec3 base = texelFetch(g_base, pixel_in_view, 0).rgb;
-  out_color = vec4(total > 0.0 ? clamp(sum / total, 0.0, 1.0) : base, 1.0);
-}
-)";
 
 // Depth maps of the input cameras (SetFrame): depth buffer only (no colour, no varyings, the
 // cheapest pass llvmpipe has); camera z is recovered from the window depth on the CPU.
@@ -363,6 +247,239 @@ int DepthFeatherMap(const float* z, int w, int h, const Image& mask, const Proje
   return count;
 }
 
+
+// A coarse proxy of `mesh` for the visibility depth maps, by vertex clustering on a grid: every
+// cluster is represented by one of its own vertices (the one nearest the cluster's mean), so the
+// proxy's faces index the mesh's vertices and follow them when they move. Faces that collapse are
+// dropped, and so are duplicates. The cell size is chosen for about `target_faces` faces; returns
+// the faces and, in *deviation_m, the largest distance of a vertex from its representative along
+// the vertex normal (how far the proxy's surface can lie in front of the mesh).
+RowMatrixX3i ProxyFaces(const Mesh& mesh, int target_faces, double* deviation_m) {
+  const int nv = mesh.num_vertices(), nf = mesh.num_faces();
+  const double area = FaceAreas(mesh).sum();
+  const RowMatrixX3d normals = VertexNormals(mesh);
+  const Eigen::Vector3d lo = mesh.vertices.colwise().minCoeff().transpose();
+  // About 2 faces per occupied cell of a surface.
+  double cell = std::sqrt(area / std::max(1.0, target_faces / 2.0));
+  RowMatrixX3i best;
+  std::vector<int> representative;
+  for (int attempt = 0; attempt < 4 && cell > 0.0; ++attempt) {
+    std::unordered_map<std::uint64_t, int> cluster_of_cell;
+    std::vector<int> cluster(nv);
+    std::vector<Eigen::Vector3d> sums;
+    std::vector<int> counts;
+    for (int v = 0; v < nv; ++v) {
+      const Eigen::Vector3d g = ((mesh.vertices.row(v).transpose() - lo) / cell).array().floor();
+      const std::uint64_t key = (static_cast<std::uint64_t>(g.x()) << 42) ^ (static_cast<std::uint64_t>(g.y()) << 21) ^
+                                static_cast<std::uint64_t>(g.z());
+      const auto [it, inserted] = cluster_of_cell.emplace(key, static_cast<int>(sums.size()));
+      if (inserted) {
+        sums.push_back(Eigen::Vector3d::Zero());
+        counts.push_back(0);
+      }
+      cluster[v] = it->second;
+      sums[it->second] += mesh.vertices.row(v).transpose();
+      ++counts[it->second];
+    }
+    std::vector<int> rep(sums.size(), -1);
+    std::vector<double> rep_distance(sums.size(), 1e300);
+    for (int v = 0; v < nv; ++v) {
+      const int k = cluster[v];
+      const double d = (mesh.vertices.row(v).transpose() - sums[k] / counts[k]).squaredNorm();
+      if (d < rep_distance[k]) {
+        rep_distance[k] = d;
+        rep[k] = v;
+      }
+    }
+    std::unordered_set<std::uint64_t> seen;
+    std::vector<Eigen::Vector3i> faces;
+    for (int f = 0; f < nf; ++f) {
+      Eigen::Vector3i r(rep[cluster[mesh.faces(f, 0)]], rep[cluster[mesh.faces(f, 1)]], rep[cluster[mesh.faces(f, 2)]]);
+      if (r[0] == r[1] || r[1] == r[2] || r[0] == r[2]) continue;
+      // Same face, same orientation: rotate the smallest index first.
+      int first = 0;
+      for (int k = 1; k < 3; ++k)
+        if (r[k] < r[first]) first = k;
+      const Eigen::Vector3i c(r[first], r[(first + 1) % 3], r[(first + 2) % 3]);
+      const std::uint64_t key = (static_cast<std::uint64_t>(c[0]) << 42) ^ (static_cast<std::uint64_t>(c[1]) << 21) ^
+                                static_cast<std::uint64_t>(c[2]);
+      if (!seen.insert(key).second) continue;
+      faces.push_back(c);
+    }
+    best.resize(static_cast<Eigen::Index>(faces.size()), 3);
+    for (std::size_t f = 0; f < faces.size(); ++f) best.row(static_cast<Eigen::Index>(f)) = faces[f].transpose();
+    representative.assign(nv, 0);
+    for (int v = 0; v < nv; ++v) representative[v] = rep[cluster[v]];
+    const double ratio = static_cast<double>(faces.size()) / target_faces;
+    if (ratio < 1.25 && ratio > 0.8) break;
+    cell *= std::sqrt(ratio);
+  }
+  double deviation = 0.0;
+  for (int v = 0; v < nv; ++v) {
+    const Eigen::Vector3d offset = mesh.vertices.row(representative[v]) - mesh.vertices.row(v);
+    deviation = std::max(deviation, std::abs(offset.dot(normals.row(v).transpose())));  // zero normal: 0
+  }
+  *deviation_m = deviation;
+  return best;
+}
+
+// One input camera as the blending (pass 2 of Render) sees it, in single precision.
+struct BlendCamera {
+  Eigen::Matrix3f rotation;
+  Eigen::Vector3f translation, center, gain;
+  float fx = 0, fy = 0, cx = 0, cy = 0, skew = 0;
+  float k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+  bool distorted = false;
+  int width = 0, height = 0;              // image size
+  const std::uint8_t* image = nullptr;    // RGB8, row-major
+  float map_scale_x = 1, map_scale_y = 1; // depth-map pixels per image pixel
+  int map_width = 0, map_height = 0;
+  const float* depth_feather = nullptr;   // interleaved (camera z, feather), map_width x map_height
+};
+
+// What the blending reads per output pixel, a rectangle of the G-buffer (row-major, rect_width
+// wide): world point (xyz, w = 1 where covered), normal (xyz) and base colour (RGBA8).
+struct BlendInput {
+  const float* position = nullptr;
+  const float* normal = nullptr;
+  const std::uint8_t* base = nullptr;
+  int rect_width = 0;
+  Eigen::Vector3f view_center;
+  float depth_bias = 0, resolution_weight = 0, grazing_cos = 0;
+  int best_k = 1;
+};
+
+float SmoothstepF(float edge1, float x) {
+  const float t = std::clamp(x / edge1, 0.0f, 1.0f);
+  return t * t * (3.0f - 2.0f * t);
+}
+
+// Camera z of the depth map at the 4 texels around `pixel_in_map` (texel centres at +0.5),
+// the farthest of them; texels outside the map count as 0 (not covered).
+float FarthestDepth(const BlendCamera& camera, float map_x, float map_y) {
+  const int x0 = static_cast<int>(std::floor(map_x - 0.5f)), y0 = static_cast<int>(std::floor(map_y - 0.5f));
+  float depth = 0.0f;
+  for (int dy = 0; dy < 2; ++dy) {
+    const int y = y0 + dy;
+    if (y < 0 || y >= camera.map_height) continue;
+    for (int dx = 0; dx < 2; ++dx) {
+      const int x = x0 + dx;
+      if (x < 0 || x >= camera.map_width) continue;
+      depth = std::max(depth, camera.depth_feather[2 * (static_cast<std::size_t>(y) * camera.map_width + x)]);
+    }
+  }
+  return depth;
+}
+
+// Bilinear RGB of an RGB8 image at a pixel position (centres at integers, clamped to the edge), in
+// [0, 255].
+Eigen::Vector3f Bilinear(const BlendCamera& camera, float px, float py) {
+  const float fx0 = std::floor(px), fy0 = std::floor(py);
+  const float ax = px - fx0, ay = py - fy0;
+  const int x0 = static_cast<int>(fx0), y0 = static_cast<int>(fy0);
+  const int xa = std::clamp(x0, 0, camera.width - 1), xb = std::clamp(x0 + 1, 0, camera.width - 1);
+  const int ya = std::clamp(y0, 0, camera.height - 1), yb = std::clamp(y0 + 1, 0, camera.height - 1);
+  const std::uint8_t* top = camera.image + 3 * static_cast<std::size_t>(ya) * camera.width;
+  const std::uint8_t* bottom = camera.image + 3 * static_cast<std::size_t>(yb) * camera.width;
+  Eigen::Vector3f value;
+  for (int c = 0; c < 3; ++c) {
+    const float t = top[3 * xa + c] + ax * (top[3 * xb + c] - top[3 * xa + c]);
+    const float b = bottom[3 * xa + c] + ax * (bottom[3 * xb + c] - bottom[3 * xa + c]);
+    value[c] = t + ay * (b - t);
+  }
+  return value;
+}
+
+// The blended RGBA8 colour of one covered G-buffer pixel (see the header for the weighting).
+// The cheap tests come first, so that cameras facing away cost little.
+void BlendPixel(const BlendInput& in, const std::vector<BlendCamera>& cameras, std::size_t g, std::uint8_t* out) {
+  const Eigen::Vector3f X(in.position[4 * g], in.position[4 * g + 1], in.position[4 * g + 2]);
+  const Eigen::Vector3f n(in.normal[4 * g], in.normal[4 * g + 1], in.normal[4 * g + 2]);
+  Eigen::Vector3f to_view = in.view_center - X;
+  const float view_distance = std::max(to_view.norm(), 1e-6f);
+  to_view /= view_distance;
+  constexpr int kMaxSlots = 9;
+  const int slots = in.best_k + 1;
+  float slot_penalty[kMaxSlots], slot_quality[kMaxSlots], slot_x[kMaxSlots], slot_y[kMaxSlots];
+  int slot_camera[kMaxSlots];
+  for (int s = 0; s < slots; ++s) {
+    slot_penalty[s] = 1e30f;
+    slot_quality[s] = 0.0f;
+    slot_x[s] = slot_y[s] = 0.0f;
+    slot_camera[s] = 0;
+  }
+  int count = 0;
+  for (int i = 0; i < static_cast<int>(cameras.size()); ++i) {
+    const BlendCamera& camera = cameras[i];
+    Eigen::Vector3f to_camera = camera.center - X;
+    if (!(n.dot(to_camera) > 0.0f)) continue;  // faces away: the cheapest test first
+    const float camera_distance = to_camera.norm();
+    to_camera /= camera_distance;
+    const float facing = n.dot(to_camera);
+    if (!(facing > 0.0f)) continue;
+    float q = in.grazing_cos > 0.0f ? SmoothstepF(in.grazing_cos, facing) : 1.0f;
+    if (!(q > 0.0f)) continue;
+    const Eigen::Vector3f p = camera.rotation * X + camera.translation;
+    if (!(p.z() > 1e-6f)) continue;
+    float xn = p.x() / p.z(), yn = p.y() / p.z();
+    if (camera.distorted) {
+      const float r2 = xn * xn + yn * yn;
+      const float radial = 1.0f + r2 * (camera.k1 + r2 * (camera.k2 + r2 * camera.k3));
+      const float xd = xn * radial + 2.0f * camera.p1 * xn * yn + camera.p2 * (r2 + 2.0f * xn * xn);
+      const float yd = yn * radial + camera.p1 * (r2 + 2.0f * yn * yn) + 2.0f * camera.p2 * xn * yn;
+      xn = xd;
+      yn = yd;
+    }
+    const float px = camera.fx * xn + camera.skew * yn + camera.cx, py = camera.fy * yn + camera.cy;
+    if (!(px >= -0.5f && py >= -0.5f && px <= camera.width - 0.5f && py <= camera.height - 0.5f)) continue;
+    // Shadow-map test against the farthest of the 4 surrounding depth texels (lenient on slanted
+    // surfaces; occlusion edges are feathered anyway), feather from the nearest texel.
+    const float map_x = (px + 0.5f) * camera.map_scale_x, map_y = (py + 0.5f) * camera.map_scale_y;
+    const float depth = FarthestDepth(camera, map_x, map_y);
+    if (!(depth > 0.0f) || p.z() > depth + in.depth_bias) continue;
+    const int tx = std::clamp(static_cast<int>(std::floor(map_x)), 0, camera.map_width - 1);
+    const int ty = std::clamp(static_cast<int>(std::floor(map_y)), 0, camera.map_height - 1);
+    const float feather = camera.depth_feather[2 * (static_cast<std::size_t>(ty) * camera.map_width + tx) + 1];
+    q *= feather;
+    if (!(q > 0.0f)) continue;
+    // Angle between the rays: sqrt(2 - 2 cos) is the chord, within 5% of the angle below 60 deg.
+    const float angle = std::sqrt(std::max(2.0f - 2.0f * to_view.dot(to_camera), 0.0f));
+    float penalty = std::max(
+        angle + in.resolution_weight * std::max(0.0f, camera_distance - view_distance) / view_distance, 1e-4f);
+    ++count;
+    float x = px, y = py;
+    int c = i;
+    for (int s = 0; s < slots; ++s) {  // insertion into the sorted slots
+      if (penalty < slot_penalty[s]) {
+        std::swap(penalty, slot_penalty[s]);
+        std::swap(q, slot_quality[s]);
+        std::swap(x, slot_x[s]);
+        std::swap(y, slot_y[s]);
+        std::swap(c, slot_camera[s]);
+      }
+    }
+  }
+  // Threshold t: the (k+1)-th smallest penalty, or pi when k or fewer cameras see X.
+  const float threshold = count > in.best_k ? slot_penalty[in.best_k] : 3.14159265f;
+  Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+  float total = 0.0f;
+  for (int s = 0; s < in.best_k; ++s) {
+    if (!(slot_penalty[s] < threshold)) continue;
+    const float w = (1.0f - slot_penalty[s] / threshold) / slot_penalty[s] * slot_quality[s];
+    if (!(w > 0.0f)) continue;
+    const BlendCamera& camera = cameras[slot_camera[s]];
+    sum += w * Bilinear(camera, slot_x[s], slot_y[s]).cwiseProduct(camera.gain);
+    total += w;
+  }
+  if (total > 0.0f) {
+    for (int c = 0; c < 3; ++c)
+      out[c] = static_cast<std::uint8_t>(std::clamp(sum[c] / total, 0.0f, 255.0f) + 0.5f);
+  } else {
+    for (int c = 0; c < 3; ++c) out[c] = in.base[4 * g + c];
+  }
+  out[3] = 255;
+}
+
 }  // namespace
 
 void ProjectiveTextureOptions::Check() const {
@@ -376,6 +493,7 @@ void ProjectiveTextureOptions::Check() const {
   if (!(grazing_cos >= 0.0 && grazing_cos <= 1.0)) throw UsageError("grazing_cos must be in [0, 1]");
   if (!(visibility_scale > 0.0 && visibility_scale <= 1.0))
     throw UsageError("visibility_scale must be in (0, 1], got " + std::to_string(visibility_scale));
+  if (visibility_faces < 0) throw UsageError("visibility_faces must be >= 0, got " + std::to_string(visibility_faces));
   if (colour_balance_samples < 1) throw UsageError("colour_balance_samples must be >= 1");
   if (!fallback_color.allFinite() || !background.allFinite()) throw UsageError("colours must be finite");
 }
@@ -392,38 +510,25 @@ struct ProjectiveTexturer::Impl {
   int num_faces = 0;
   bool has_colors = false;
 
-  GLuint gbuffer_program = 0, blend_program = 0, depth_program = 0;
-  GLuint vertex_array = 0, empty_vertex_array = 0;
+  GLuint gbuffer_program = 0, depth_program = 0;
+  GLuint vertex_array = 0;
+  // The depth maps draw the proxy's faces (or all faces) from the same vertex buffer.
+  GLuint depth_vertex_array = 0, depth_index_buffer = 0;
+  int num_depth_faces = 0;
+  double proxy_bias_m = 0.0;  // added to depth_bias_m: how far the proxy can lie in front
   GLuint position_buffer = 0;
   GLuint color_buffer = 0;
   GLuint index_buffer = 0;
-  GLuint image_array = 0;
-  GLuint depth_array = 0;
-  struct Atlas {
-    int width = 0, height = 0, layers = 0;
-  };
-  Atlas image_atlas, depth_atlas;  // sizes of image_array and depth_array
-
-  // (Re)creates the 2D texture array `*texture` when its size differs from `size`.
-  static void ReallocateArray(GLuint* texture, Atlas* current, const Atlas& size, GLenum format, GLint filter,
-                              GLint wrap) {
-    if (size.width == current->width && size.height == current->height && size.layers == current->layers) return;
-    glDeleteTextures(1, texture);
-    glGenTextures(1, texture);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, *texture);
-    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, format, size.width, size.height, size.layers);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, wrap);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, wrap);
-    const float border[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-    glTexParameterfv(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_BORDER_COLOR, border);
-    *current = size;
-  }
-  // Render targets: the G-buffer (pass 1) and the blended colour (pass 2).
-  GLuint gbuffer_framebuffer = 0, output_framebuffer = 0;
+  // Render target of pass 1 of Render: the G-buffer.
+  GLuint gbuffer_framebuffer = 0;
   GLuint gbuffer_textures[3] = {0, 0, 0};  // world point RGBA32F, normal RGBA16F, base colour RGBA8
-  GLuint gbuffer_depth = 0, output_color = 0;
+  GLuint gbuffer_depth = 0;
+  // The covered rectangle of the G-buffer read back: world point and normal (RGBA float), base
+  // colour (RGBA8).
+  std::vector<float> gbuffer_position, gbuffer_normal;
+  std::vector<std::uint8_t> gbuffer_base;
+  std::vector<Image> frame_images;  // per camera: the RGB8 image of the current frame
+  std::vector<BlendCamera> blend_cameras;
   int fb_width = 0, fb_height = 0;
   // Render target of the input cameras' depth maps.
   // Render targets of the input cameras' depth maps, one per camera, so that all are drawn before
@@ -462,12 +567,8 @@ struct ProjectiveTexturer::Impl {
     num_faces = mesh.num_faces();
     has_colors = mesh.has_colors();
     context.MakeCurrent();
-    const std::string blend = "#version 430 core\n#define BEST_K " + std::to_string(options.best_k) + "\n" +
-                              kBlendFragmentShader;
     gbuffer_program = LinkProgram(kVertexShader, kGBufferFragmentShader, "projective texture (G-buffer)");
-    blend_program = LinkProgram(render_internal::kFullScreenTriangleVertexShader, blend, "projective texture (blending)");
     depth_program = LinkProgram(kDepthVertexShader, kDepthFragmentShader, "projective texture (depth maps)");
-    glGenVertexArrays(1, &empty_vertex_array);
     glGenVertexArrays(1, &vertex_array);
     glBindVertexArray(vertex_array);
     glGenBuffers(1, &position_buffer);
@@ -493,6 +594,30 @@ struct ProjectiveTexturer::Impl {
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer);
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
                  indices.data(), GL_STATIC_DRAW);
+    // The depth maps' proxy: the same vertex buffer, its own faces.
+    const int proxy_target = options.visibility_faces;
+    num_depth_faces = num_faces;
+    glGenVertexArrays(1, &depth_vertex_array);
+    glBindVertexArray(depth_vertex_array);
+    glBindBuffer(GL_ARRAY_BUFFER, position_buffer);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+    glEnableVertexAttribArray(0);
+    glGenBuffers(1, &depth_index_buffer);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, depth_index_buffer);
+    if (proxy_target > 0 && num_faces > proxy_target * 3 / 2) {
+      double deviation_m = 0.0;
+      RowMatrixX3i proxy = ProxyFaces(mesh, proxy_target, &deviation_m);
+      if (proxy.rows() > 0) {  // else (a degenerate mesh) the full mesh
+        mesh_topology.faces = std::move(proxy);
+        proxy_bias_m = deviation_m;
+        num_depth_faces = mesh_topology.num_faces();
+        indices.resize(static_cast<std::size_t>(num_depth_faces) * 3);
+        for (int f = 0; f < num_depth_faces; ++f)
+          for (int k = 0; k < 3; ++k) indices[3 * f + k] = static_cast<std::uint32_t>(mesh_topology.faces(f, k));
+      }
+    }
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
+                 indices.data(), GL_STATIC_DRAW);
     glBindVertexArray(0);
     UploadPositions(mesh.vertices);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
@@ -507,18 +632,14 @@ struct ProjectiveTexturer::Impl {
       return;
     }
     glDeleteProgram(gbuffer_program);
-    glDeleteProgram(blend_program);
     glDeleteProgram(depth_program);
-    const GLuint buffers[] = {position_buffer, color_buffer, index_buffer};
-    glDeleteBuffers(3, buffers);
-    const GLuint arrays[] = {vertex_array, empty_vertex_array};
+    const GLuint buffers[] = {position_buffer, color_buffer, index_buffer, depth_index_buffer};
+    glDeleteBuffers(4, buffers);
+    const GLuint arrays[] = {vertex_array, depth_vertex_array};
     glDeleteVertexArrays(2, arrays);
-    const GLuint textures[] = {image_array, depth_array, gbuffer_textures[0], gbuffer_textures[1], gbuffer_textures[2]};
-    glDeleteTextures(5, textures);
-    const GLuint framebuffers[] = {gbuffer_framebuffer, output_framebuffer};
-    glDeleteFramebuffers(2, framebuffers);
-    const GLuint renderbuffers[] = {gbuffer_depth, output_color};
-    glDeleteRenderbuffers(2, renderbuffers);
+    glDeleteTextures(3, gbuffer_textures);
+    glDeleteFramebuffers(1, &gbuffer_framebuffer);
+    glDeleteRenderbuffers(1, &gbuffer_depth);
     for (const DepthTarget& target : depth_targets) {
       glDeleteFramebuffers(1, &target.framebuffer);
       glDeleteRenderbuffers(1, &target.depth);
@@ -586,8 +707,8 @@ struct ProjectiveTexturer::Impl {
             .cast<float>();
     glUseProgram(depth_program);
     glUniformMatrix4fv(glGetUniformLocation(depth_program, "clip_from_world"), 1, GL_FALSE, clip_from_world.data());
-    glBindVertexArray(vertex_array);
-    glDrawElements(GL_TRIANGLES, num_faces * 3, GL_UNSIGNED_INT, nullptr);
+    glBindVertexArray(depth_vertex_array);
+    glDrawElements(GL_TRIANGLES, num_depth_faces * 3, GL_UNSIGNED_INT, nullptr);
     glBindVertexArray(0);
     glDisable(GL_CULL_FACE);
     CheckGl("depth map of camera " + camera.name);
@@ -628,7 +749,8 @@ struct ProjectiveTexturer::Impl {
         const int mx = std::min(map.width - 1, static_cast<int>((px + 0.5) * map.width / frame.camera.width));
         const int my = std::min(map.height - 1, static_cast<int>((py + 0.5) * map.height / frame.camera.height));
         const float depth = frame.depth(mx, my);
-        if (depth <= 0.0f || frame.camera.PointInCamera(X).z() > depth + options.depth_bias_m) continue;
+        if (depth <= 0.0f || frame.camera.PointInCamera(X).z() > depth + options.depth_bias_m + proxy_bias_m)
+          continue;
         if (frame.feather(mx, my) < 0.99f) continue;
         const Eigen::Vector3d rgb = SampleRgb(*frame.image, pixel);
         if (rgb.minCoeff() < 0.03 || rgb.maxCoeff() > 0.97) continue;  // log of clipped values is unreliable
@@ -760,28 +882,14 @@ struct ProjectiveTexturer::Impl {
     gains = options.colour_balance ? FitGains(vertices, frames) : std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Ones());
     info.colour_gains = gains;
 
-    // Upload to the texture arrays (layers sized to the largest camera).
-    int width = 1, height = 1, map_width = 1, map_height = 1;
+    // The blending reads the images on the CPU: keep them (the caller's may go away).
+    frame_images.resize(n);
     for (int i = 0; i < n; ++i) {
-      width = std::max(width, input_cameras[i].width);
-      height = std::max(height, input_cameras[i].height);
-      map_width = std::max(map_width, vis_cameras[i].width);
-      map_height = std::max(map_height, vis_cameras[i].height);
+      if (rgb[i] == &converted[i]) frame_images[i] = std::move(converted[i]);
+      else frame_images[i] = *rgb[i];
     }
-    const int layers = std::max(n, 1);
-    ReallocateArray(&image_array, &image_atlas, {width, height, layers}, GL_RGBA8, GL_LINEAR, GL_CLAMP_TO_EDGE);
-    ReallocateArray(&depth_array, &depth_atlas, {map_width, map_height, layers}, GL_RG32F, GL_NEAREST,
-                    GL_CLAMP_TO_BORDER);  // border 0: outside a map nothing is visible
-    for (int i = 0; i < n; ++i) {
-      glBindTexture(GL_TEXTURE_2D_ARRAY, image_array);
-      glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, i, input_cameras[i].width, input_cameras[i].height, 1, GL_RGB,
-                      GL_UNSIGNED_BYTE, rgb[i]->data.data());
-      glBindTexture(GL_TEXTURE_2D_ARRAY, depth_array);
-      glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, i, vis_cameras[i].width, vis_cameras[i].height, 1, GL_RG, GL_FLOAT,
-                      depth_feather[i].data());
-    }
-    CheckGl("upload");
     cameras = input_cameras;
+    SetBlendCameras();
     frame_set = true;
   }
 
@@ -789,9 +897,7 @@ struct ProjectiveTexturer::Impl {
     if (gbuffer_framebuffer != 0 && width == fb_width && height == fb_height) return;
     if (gbuffer_framebuffer == 0) {
       glGenFramebuffers(1, &gbuffer_framebuffer);
-      glGenFramebuffers(1, &output_framebuffer);
       glGenRenderbuffers(1, &gbuffer_depth);
-      glGenRenderbuffers(1, &output_color);
     }
     const GLuint old[] = {gbuffer_textures[0], gbuffer_textures[1], gbuffer_textures[2]};
     glDeleteTextures(3, old);
@@ -810,12 +916,7 @@ struct ProjectiveTexturer::Impl {
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, gbuffer_depth);
     const GLenum draw_buffers[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
     glDrawBuffers(3, draw_buffers);
-    const bool gbuffer_complete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
-    glBindRenderbuffer(GL_RENDERBUFFER, output_color);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
-    glBindFramebuffer(GL_FRAMEBUFFER, output_framebuffer);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, output_color);
-    if (!gbuffer_complete || glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw RenderContextError("OpenGL: projective texture framebuffer " + std::to_string(width) + "x" +
                                std::to_string(height) + " is incomplete");
     fb_width = width;
@@ -932,28 +1033,54 @@ struct ProjectiveTexturer::Impl {
     glDisable(GL_CULL_FACE);
     glDisable(GL_DEPTH_TEST);
 
-    // Pass 2: blending, once per covered pixel. Cleared to transparent black, so that the
-    // distortion remap below interpolates premultiplied colour; the background colour is
-    // composited afterwards.
-    glBindFramebuffer(GL_FRAMEBUFFER, output_framebuffer);
-    glClearBufferfv(GL_COLOR, 0, zero);
-    glUseProgram(blend_program);
-    SetCameraUniforms(view);
-    glBindVertexArray(empty_vertex_array);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    glBindVertexArray(0);
-
     glDisable(GL_SCISSOR_TEST);
 
+    // Pass 2: blending, once per covered pixel, on the CPU (all cores): on a software rasteriser
+    // a fragment shader pays for every camera's tests on every pixel, the CPU only for the cameras
+    // a point faces. Uncovered pixels stay transparent black, so that the distortion remap below
+    // interpolates premultiplied colour; the background colour is composited afterwards.
     readback.assign(static_cast<std::size_t>(width) * height * 4, 0);
-    glReadBuffer(GL_COLOR_ATTACHMENT0);
     if (rect.x1 > rect.x0 && rect.y1 > rect.y0) {
-      glPixelStorei(GL_PACK_ROW_LENGTH, width);
-      glReadPixels(rect.x0, rect.y0, rect.x1 - rect.x0, rect.y1 - rect.y0, GL_RGBA, GL_UNSIGNED_BYTE,
-                   readback.data() + 4 * (static_cast<std::size_t>(rect.y0) * width + rect.x0));
-      glPixelStorei(GL_PACK_ROW_LENGTH, 0);
+      const int rect_width = rect.x1 - rect.x0, rect_height = rect.y1 - rect.y0;
+      const std::size_t rect_pixels = static_cast<std::size_t>(rect_width) * rect_height;
+      gbuffer_position.resize(4 * rect_pixels);
+      gbuffer_normal.resize(4 * rect_pixels);
+      gbuffer_base.resize(4 * rect_pixels);
+      glReadBuffer(GL_COLOR_ATTACHMENT0);
+      glReadPixels(rect.x0, rect.y0, rect_width, rect_height, GL_RGBA, GL_FLOAT, gbuffer_position.data());
+      glReadBuffer(GL_COLOR_ATTACHMENT1);
+      glReadPixels(rect.x0, rect.y0, rect_width, rect_height, GL_RGBA, GL_FLOAT, gbuffer_normal.data());
+      glReadBuffer(GL_COLOR_ATTACHMENT2);
+      glReadPixels(rect.x0, rect.y0, rect_width, rect_height, GL_RGBA, GL_UNSIGNED_BYTE, gbuffer_base.data());
+      CheckGl("rendering view " + view.name);
+      BlendInput in;
+      in.position = gbuffer_position.data();
+      in.normal = gbuffer_normal.data();
+      in.base = gbuffer_base.data();
+      in.rect_width = rect_width;
+      in.view_center = view.center_in_world().cast<float>();
+      in.depth_bias = static_cast<float>(options.depth_bias_m + proxy_bias_m);
+      in.resolution_weight = static_cast<float>(options.resolution_weight);
+      in.grazing_cos = static_cast<float>(options.grazing_cos);
+      in.best_k = options.best_k;
+      // Bands of rows, interleaved over the workers so that each gets a share of the mesh.
+      constexpr int kBand = 8;
+      const int workers = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 8);
+      auto blend_rows = [&](int worker) {
+        for (int band = worker * kBand; band < rect_height; band += workers * kBand)
+          for (int y = band; y < std::min(band + kBand, rect_height); ++y)
+            for (int x = 0; x < rect_width; ++x) {
+              const std::size_t g = static_cast<std::size_t>(y) * rect_width + x;
+              if (gbuffer_position[4 * g + 3] == 0.0f) continue;  // not covered
+              BlendPixel(in, blend_cameras, g,
+                         readback.data() + 4 * (static_cast<std::size_t>(rect.y0 + y) * width + rect.x0 + x));
+            }
+      };
+      std::vector<std::future<void>> others;
+      for (int worker = 1; worker < workers; ++worker) others.push_back(std::async(std::launch::async, blend_rows, worker));
+      blend_rows(0);
+      for (std::future<void>& other : others) other.get();
     }
-    CheckGl("rendering view " + view.name);
 
     RenderResult result;
     cv::Mat rgba(height, width, CV_8UC4, readback.data());
@@ -987,72 +1114,37 @@ struct ProjectiveTexturer::Impl {
     return result;
   }
 
-  void SetCameraUniforms(const Camera& view) {
-    const int n = static_cast<int>(cameras.size());
-    std::vector<float> rotation(9 * std::max(n, 1)), translation(3 * std::max(n, 1)), intrinsics(4 * std::max(n, 1)),
-        skew(std::max(n, 1)), dist(4 * std::max(n, 1)), k3(std::max(n, 1)), size(2 * std::max(n, 1)),
-        center(3 * std::max(n, 1)), gain(3 * std::max(n, 1)), vis_scale(2 * std::max(n, 1)),
-        vis_size(2 * std::max(n, 1));
-    for (int i = 0; i < n; ++i) {
+  // The input cameras as the blending sees them (after the frame's images, maps and gains).
+  void SetBlendCameras() {
+    blend_cameras.clear();
+    for (std::size_t i = 0; i < cameras.size(); ++i) {
       const Camera& camera = cameras[i];
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) rotation[9 * i + 3 * c + r] = static_cast<float>(camera.rotation(r, c));  // column-major
-      const Eigen::Vector3d cc = camera.center_in_world();
-      for (int k = 0; k < 3; ++k) {
-        translation[3 * i + k] = static_cast<float>(camera.translation[k]);
-        center[3 * i + k] = static_cast<float>(cc[k]);
-        gain[3 * i + k] = static_cast<float>(gains[i][k]);
-      }
-      intrinsics[4 * i] = static_cast<float>(camera.K(0, 0));
-      intrinsics[4 * i + 1] = static_cast<float>(camera.K(1, 1));
-      intrinsics[4 * i + 2] = static_cast<float>(camera.K(0, 2));
-      intrinsics[4 * i + 3] = static_cast<float>(camera.K(1, 2));
-      skew[i] = static_cast<float>(camera.K(0, 1));
-      for (int k = 0; k < 4; ++k) dist[4 * i + k] = static_cast<float>(camera.dist[k]);
-      k3[i] = static_cast<float>(camera.dist[4]);
-      size[2 * i] = static_cast<float>(camera.width);
-      size[2 * i + 1] = static_cast<float>(camera.height);
-      vis_size[2 * i] = static_cast<float>(vis_cameras[i].width);
-      vis_size[2 * i + 1] = static_cast<float>(vis_cameras[i].height);
-      vis_scale[2 * i] = vis_size[2 * i] / size[2 * i];
-      vis_scale[2 * i + 1] = vis_size[2 * i + 1] / size[2 * i + 1];
+      BlendCamera b;
+      b.rotation = camera.rotation.cast<float>();
+      b.translation = camera.translation.cast<float>();
+      b.center = camera.center_in_world().cast<float>();
+      b.gain = gains[i].cast<float>();
+      b.fx = static_cast<float>(camera.K(0, 0));
+      b.fy = static_cast<float>(camera.K(1, 1));
+      b.cx = static_cast<float>(camera.K(0, 2));
+      b.cy = static_cast<float>(camera.K(1, 2));
+      b.skew = static_cast<float>(camera.K(0, 1));
+      b.k1 = static_cast<float>(camera.dist[0]);
+      b.k2 = static_cast<float>(camera.dist[1]);
+      b.p1 = static_cast<float>(camera.dist[2]);
+      b.p2 = static_cast<float>(camera.dist[3]);
+      b.k3 = static_cast<float>(camera.dist[4]);
+      b.distorted = b.k1 != 0.0f || b.k2 != 0.0f || b.p1 != 0.0f || b.p2 != 0.0f || b.k3 != 0.0f;
+      b.width = camera.width;
+      b.height = camera.height;
+      b.image = frame_images[i].data.data();
+      b.map_width = vis_cameras[i].width;
+      b.map_height = vis_cameras[i].height;
+      b.map_scale_x = static_cast<float>(b.map_width) / static_cast<float>(camera.width);
+      b.map_scale_y = static_cast<float>(b.map_height) / static_cast<float>(camera.height);
+      b.depth_feather = depth_feather[i].data();
+      blend_cameras.push_back(b);
     }
-    const GLuint program = blend_program;
-    auto loc = [&](const char* name) { return glGetUniformLocation(program, name); };
-    glUniform1i(loc("num_cameras"), n);
-    if (n > 0) {
-      glUniformMatrix3fv(loc("cam_rotation"), n, GL_FALSE, rotation.data());
-      glUniform3fv(loc("cam_translation"), n, translation.data());
-      glUniform4fv(loc("cam_intrinsics"), n, intrinsics.data());
-      glUniform1fv(loc("cam_skew"), n, skew.data());
-      glUniform4fv(loc("cam_dist"), n, dist.data());
-      glUniform1fv(loc("cam_k3"), n, k3.data());
-      glUniform2fv(loc("cam_size"), n, size.data());
-      glUniform3fv(loc("cam_center"), n, center.data());
-      glUniform3fv(loc("cam_gain"), n, gain.data());
-      glUniform2fv(loc("vis_scale"), n, vis_scale.data());
-      glUniform2fv(loc("vis_size"), n, vis_size.data());
-    }
-    glUniform2f(loc("image_atlas_size"), static_cast<float>(image_atlas.width), static_cast<float>(image_atlas.height));
-    glUniform2f(loc("depth_atlas_size"), static_cast<float>(depth_atlas.width), static_cast<float>(depth_atlas.height));
-    const Eigen::Vector3f view_center = view.center_in_world().cast<float>();
-    glUniform3fv(loc("view_center"), 1, view_center.data());
-    glUniform1f(loc("depth_bias"), static_cast<float>(options.depth_bias_m));
-    glUniform1f(loc("resolution_weight"), static_cast<float>(options.resolution_weight));
-    glUniform1f(loc("grazing_cos"), static_cast<float>(options.grazing_cos));
-    const char* gbuffer_names[3] = {"g_position", "g_normal", "g_base"};
-    for (int k = 0; k < 3; ++k) {
-      glActiveTexture(GL_TEXTURE2 + k);
-      glBindTexture(GL_TEXTURE_2D, gbuffer_textures[k]);
-      glUniform1i(loc(gbuffer_names[k]), 2 + k);
-    }
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, image_array);
-    glUniform1i(loc("images"), 0);
-    glActiveTexture(GL_TEXTURE1);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, depth_array);
-    glUniform1i(loc("depth_feather"), 1);
-    glActiveTexture(GL_TEXTURE0);
   }
 };
 

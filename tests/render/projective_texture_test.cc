@@ -265,6 +265,44 @@ TEST(ProjectiveTexturer, HalfResolutionVisibilityStaysClose) {
   EXPECT_THROW(options.Check(), UsageError);
 }
 
+TEST(ProjectiveTexturer, ProxyDepthMapsFollowTheMeshAndStayClose) {
+  Mesh real = ColouredSphere();  // 5120 faces
+  std::vector<Camera> ring = Ring(8);
+  ring[3].dist << -0.2, 0.05, 0.001, -0.001, 0.0;  // its depth map goes through MeshRenderer
+  const Camera heldout = RingCamera("heldout", 22.5, 2.0);
+  ProjectiveTextureOptions coarse;
+  coarse.visibility_faces = 600;  // depth maps from a ~600-face proxy
+  ProjectiveTextureOptions exact;
+  exact.visibility_faces = 0;
+  ProjectiveTexturer proxy(real, coarse), full(real, exact);
+  // The second frame moves and stretches the mesh: the proxy must follow its vertices.
+  for (int frame = 0; frame < 2; ++frame) {
+    if (frame == 1)
+      for (int v = 0; v < real.num_vertices(); ++v)
+        real.vertices.row(v) = Eigen::RowVector3d(0.1 + 1.2 * (real.vertices(v, 0) - kCentre.x()),
+                                                  real.vertices(v, 1), real.vertices(v, 2));
+    GroundTruth truth(real);
+    std::vector<Image> masks;
+    const std::vector<Image> images = ImagesOf(&truth, ring, &masks);
+    proxy.SetFrame(real.vertices, ring, images, masks);
+    full.SetFrame(real.vertices, ring, images, masks);
+    for (std::size_t i = 0; i < ring.size(); ++i)
+      EXPECT_NEAR(proxy.frame_info().visible_pixels[i], full.frame_info().visible_pixels[i],
+                  0.05 * full.frame_info().visible_pixels[i])
+          << "frame " << frame << " camera " << i;
+    const RenderResult expected = truth.Render(heldout);
+    const RenderResult from_proxy = proxy.Render(heldout, true);
+    const RenderResult from_full = full.Render(heldout, true);
+    const Image mask = UnionMask(expected.silhouette, from_proxy.silhouette);
+    const double psnr_proxy = MaskedPsnr(expected.color, from_proxy.color, mask);
+    // (About 50 dB for both here: the proxy costs nothing visible.)
+    EXPECT_GT(psnr_proxy, 40.0) << "frame " << frame;
+    EXPECT_GT(psnr_proxy, MaskedPsnr(expected.color, from_full.color, mask) - 2.0) << "frame " << frame;
+  }
+  coarse.visibility_faces = -1;
+  EXPECT_THROW(coarse.Check(), UsageError);
+}
+
 TEST(ProjectiveTexturer, BadInputThrows) {
   const Mesh grey = FlatSphere(0.5f, 0.5f, 0.5f);
   ProjectiveTexturer texturer(grey);
