@@ -77,6 +77,7 @@ int RunCalibrate(const ParsedArgs& args, const Context& context) {
   // Detection, camera by camera.
   ProgressCallback progress = context.make_progress();
   CheckerboardDetectOptions detect;
+  detect.try_magnified_stretch = args.has("small-boards");
   std::vector<CameraBoardViews> views;
   if (args.has("images")) {
     for (const std::string& folder : CameraFolders(args.get("images")))
@@ -187,6 +188,7 @@ CommandSpec MakeCalibrateCommand() {
       {"world", "camera|board", "world frame: the reference camera (default) or a board pose"},
       {"world-frame", "N", "with --world board: the frame whose board is the world (default: most seen)"},
       {"no-bundle-adjustment", "", "skip the joint adjustment (chained initial poses only)"},
+      {"small-boards", "", "also search a magnified, stretched copy for small grazing boards (slow on frames without a board)"},
   };
   spec.run = RunCalibrate;
   return spec;

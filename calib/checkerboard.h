@@ -54,8 +54,14 @@ struct CheckerboardDetectOptions {
   bool try_sector_based = true;
   // Then, if that failed, the sector-based detector on copies stretched vertically by 2, 3 and
   // 4: a board lying on the floor, seen at a grazing angle, is foreshortened vertically so much
-  // that neither detector finds it as it is (utrecht_4cam cam1 and cam4).
+  // that neither detector finds it as it is (utrecht_4cam cam1 needs 2x). Such corners are
+  // refined in the stretched frame, and keep the sector detector's refinement where the model
+  // fit (below) cannot fit every corner.
   bool try_vertical_stretch = true;
+  // With try_vertical_stretch: last, a copy scaled by 1.5 horizontally and 4.5 vertically, for
+  // a board that is also small (utrecht_4cam cam4: ~8 px per square across, 3-4 px between
+  // rows). Off by default: it costs several seconds on every frame without a board.
+  bool try_magnified_stretch = false;
   // Half size of the cornerSubPix search window, pixels; 0 = from the corner spacing.
   int subpix_half_window_px = 0;
   // Images wider than this are detected on a downscaled copy first (then refined at full
