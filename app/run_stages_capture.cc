@@ -108,11 +108,12 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
     if (state.frames.size() != 1) throw InputError(inputs.folder.TrackingStatePath(frame), "expected one frame");
     return state;
   };
-  int done = 0;
+  // Progress (rate and ETA) counts only the frames to compute, as in the other stages.
+  std::size_t todo = 0, done = 0;
+  for (int frame = inputs.frames.first; frame < inputs.frames.end; ++frame) todo += !TrackedFrameFinished(inputs.folder, frame);
   for (int frame = inputs.frames.first; frame < inputs.frames.end; ++frame) {
     if (TrackedFrameFinished(inputs.folder, frame)) {
       ++report.skipped;
-      ReportProgress(progress, "tracking", ++done, inputs.frames.size(), "frame " + std::to_string(frame) + " (done before)");
       continue;
     }
     if (!tracker.initialized() && frame > 0 && TrackedFrameFinished(inputs.folder, frame - 1)) {
@@ -141,7 +142,7 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
     for (const std::string& flag : result.flags)
       if (flag != "initialized") report.notes.push_back("frame " + std::to_string(frame) + ": " + flag);
     ++report.computed;
-    ReportProgress(progress, "tracking", ++done, inputs.frames.size(),
+    ReportProgress(progress, "tracking", ++done, todo,
                    "frame " + std::to_string(frame) + " IoU " + std::to_string(result.mean_iou).substr(0, 5));
     if (report.computed % 10 == 0) timings->Save();
   }
