@@ -94,16 +94,22 @@ struct SegmentFrame {
   }
 };
 
+// `skirt` (may be null): {skirt_length_m, skirt_flare_m} of BodyShape, applied to the lower torso.
 template <typename T>
 SegmentFrame<T> MakeSegmentFrame(const BodyTemplate& body, int segment, const std::array<Vec3<T>, kNumTemplateJoints>& rest,
-                                 const T* length, const T* girth) {
+                                 const T* length, const T* girth, const T* skirt = nullptr) {
   const SegmentShape& shape = body.segments()[segment];
   SegmentFrame<T> f;
   f.a = rest[shape.joint_a] + shape.offset_a.cast<T>() * length[segment];
   const Vec3<T> b = rest[shape.joint_b] + shape.offset_b.cast<T>() * length[segment];
-  const Vec3<T> d = b - f.a;
+  Vec3<T> d = b - f.a;
   f.length = sqrt(d.squaredNorm() + T(1e-12));
   f.axis = d / f.length;
+  const bool skirted = skirt != nullptr && segment == int(BodySegment::kLowerTorso);
+  if (skirted) {
+    f.a = f.a - f.axis * skirt[0];
+    f.length = f.length + skirt[0];
+  }
   const Vec3<T> hint = shape.e1_hint.cast<T>();
   Vec3<T> e1 = hint - f.axis * hint.dot(f.axis);
   f.e1 = e1 / sqrt(e1.squaredNorm() + T(1e-12));
@@ -115,6 +121,10 @@ SegmentFrame<T> MakeSegmentFrame(const BodyTemplate& body, int segment, const st
   f.rby = T(shape.radii_b.y()) * g;
   f.cap_a = T(shape.cap_a) * g;
   f.cap_b = T(shape.cap_b) * g;
+  if (skirted) {
+    f.rax = f.rax + skirt[1];
+    f.ray = f.ray + skirt[1];
+  }
   return f;
 }
 

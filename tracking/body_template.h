@@ -1,7 +1,8 @@
 #pragma once
 // The tracker's 16-segment skeletal body template (after Carranza et al. 2003): a kinematic
 // skeleton with 37 degrees of freedom and anatomical joint limits, sixteen closed tapered
-// elliptic capsules (one per BodySegment), and per-segment length and girth scales.
+// elliptic capsules (one per BodySegment), per-segment length and girth scales, and a skirt
+// (the lower torso extended down and flared) for long skirts and dresses.
 //
 // Frame and units: world Z up, metres. At rest the template stands at the origin in an A-pose
 // (upper arms 40 degrees from the vertical), facing +y; its left side is -x. The joints carry
@@ -51,6 +52,11 @@ struct JointDof {
 struct BodyShape {
   std::array<double, kNumBodySegments> length_scale;
   std::array<double, kNumBodySegments> girth_scale;
+  // A garment DOF for long skirts and dresses: the lower torso's capsule extends this much
+  // further down along its axis, m (0 = no skirt) ...
+  double skirt_length_m = 0.0;
+  // ... and its radii at that lower end grow by this much, m (a cone flaring from the waist).
+  double skirt_flare_m = 0.0;
   BodyShape() { length_scale.fill(1.0); girth_scale.fill(1.0); }
   // A uniformly scaled template of `height_m` (lengths and girths scaled alike).
   static BodyShape Uniform(double height_m);

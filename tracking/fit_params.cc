@@ -16,7 +16,11 @@ void ShapeArrays(const double* shape, double* length, double* girth) {
   }
 }
 
-void ShapeToParams(const BodyShape& shape, double* params) {
+void ShapeToParams(const BodyShape& shape, double* params, double* skirt) {
+  if (skirt) {
+    skirt[0] = shape.skirt_length_m;
+    skirt[1] = shape.skirt_flare_m;
+  }
   for (int g = 0; g < kNumShapeGroups; ++g) {
     double l = 0, gi = 0;
     int n = 0;
@@ -31,9 +35,13 @@ void ShapeToParams(const BodyShape& shape, double* params) {
   }
 }
 
-BodyShape ParamsToShape(const double* params) {
+BodyShape ParamsToShape(const double* params, const double* skirt) {
   BodyShape shape;
   ShapeArrays(params, shape.length_scale.data(), shape.girth_scale.data());
+  if (skirt) {
+    shape.skirt_length_m = skirt[0];
+    shape.skirt_flare_m = skirt[1];
+  }
   return shape;
 }
 
@@ -65,7 +73,7 @@ std::array<SegmentWorld, kNumBodySegments> SegmentsInWorld(const BodyTemplate& b
     SegmentWorld& w = out[s];
     const int joint = body.segments()[s].joint;
     JointWorldTransform(body, joint, rest, fp.root_t, fp.root_aa, fp.root_reference, jp, &w.R, &w.P);
-    w.frame = MakeSegmentFrame(body, s, rest, length, girth);
+    w.frame = MakeSegmentFrame(body, s, rest, length, girth, fp.skirt);
     w.a = w.P + w.R * (w.frame.a - rest[joint]);
     w.axis = w.R * w.frame.axis;
     w.e1 = w.R * w.frame.e1;

@@ -29,13 +29,15 @@ struct FitParams {
   Eigen::Matrix3d root_reference = Eigen::Matrix3d::Identity();
   std::array<std::array<double, 3>, kNumTemplateJoints> dofs{};
   double shape[kShapeBlockSize] = {};
+  double skirt[2] = {0.0, 0.0};  // BodyShape::skirt_length_m, skirt_flare_m (lower torso only)
 };
 
 // Per-segment length and girth scales from a shape block.
 void ShapeArrays(const double* shape, double* length, double* girth);
-// The shape block of `shape` (group means) and back.
-void ShapeToParams(const BodyShape& shape, double* params);
-BodyShape ParamsToShape(const double* params);
+// The shape block of `shape` (group means) and back; `skirt` (2 values, may be null) carries
+// the skirt DOFs.
+void ShapeToParams(const BodyShape& shape, double* params, double* skirt = nullptr);
+BodyShape ParamsToShape(const double* params, const double* skirt = nullptr);
 // The pose the parameters describe, and parameters for a pose (root_aa zero, the rotation in
 // root_reference).
 TemplatePose ParamsToPose(const FitParams& fp);

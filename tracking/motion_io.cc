@@ -44,7 +44,8 @@ void WritePosesJson(const std::string& path, const BodyTemplate& body, const Bod
     length[BodySegmentName(s)] = shape.length_scale[s];
     girth[BodySegmentName(s)] = shape.girth_scale[s];
   }
-  root["shape"] = {{"length_scale", length}, {"girth_scale", girth}};
+  root["shape"] = {{"length_scale", length}, {"girth_scale", girth}, {"skirt_length_m", shape.skirt_length_m},
+                   {"skirt_flare_m", shape.skirt_flare_m}};
   json rest = json::array();
   for (const Vector3d& p : body.RestPositions(shape)) rest.push_back({p.x(), p.y(), p.z()});
   root["rest_joint_positions"] = rest;
@@ -98,6 +99,8 @@ PosesFile ReadPosesJson(const std::string& path, const BodyTemplate& body, const
       file.shape.length_scale[s] = shape.at("length_scale").at(BodySegmentName(s)).get<double>();
       file.shape.girth_scale[s] = shape.at("girth_scale").at(BodySegmentName(s)).get<double>();
     }
+    file.shape.skirt_length_m = shape.value("skirt_length_m", 0.0);  // absent in files without a skirt
+    file.shape.skirt_flare_m = shape.value("skirt_flare_m", 0.0);
     for (const json& jf : root.at("frames")) {
       TrackedFrame f;
       f.frame = jf.at("frame").get<int>();

@@ -30,6 +30,7 @@ void SilhouetteFitOptions::Check() const {
     throw UsageError("tracking: loss scales must be positive");
   if (!(image_to_model_weight >= 0) || !(prior_weight >= 0) || !(shape_prior_weight >= 0))
     throw UsageError("tracking: weights must be non-negative");
+  if (!(skirt_prior_weight >= 0)) throw UsageError("tracking: skirt_prior_weight must be non-negative");
   if (num_threads < 1) throw UsageError("tracking: num_threads must be >= 1");
 }
 
@@ -158,6 +159,7 @@ struct SegmentCost {
   std::vector<int> chain_joints;           // joints with DOFs, in parameter-block order
   std::vector<SurfaceCoord> samples;       // model -> image
   std::vector<int> rays;                   // image -> model: indices into view rays
+  bool skirt_block = false;                // the lower torso with the skirt block (2) after the shape block
   double ray_weight = 1.0;                 // reduced px per metre at the body, times the term weight
   // Fast path when the shape is constant: rest joints, the samples relative to the segment's
   // joint, and the capsule, all precomputed in double.
@@ -165,6 +167,7 @@ struct SegmentCost {
   std::array<Vector3d, kNumTemplateJoints> rest_fixed;
   std::vector<Vector3d> local_samples;
   ti::SegmentFrame<double> frame_fixed;
+  double skirt_fixed[2] = {0.0, 0.0};      // the skirt when it is not a parameter block
 
   // Camera projection (with distortion when the camera has any) of a camera-frame point to
   // reduced pixels, then the signed distance residual.
@@ -219,7 +222,8 @@ struct SegmentCost {
         girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
       }
       ti::RestPositions(*body, length, girth, &rest);
-      frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth);
+      const T no_skirt[2] = {T(skirt_fixed[0]), T(skirt_fixed[1])};
+      frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth, skirt_block ? p[3 + chain_joints.size()] : no_skirt);
     }
     ti::Mat3<T> R;
     ti::Vec3<T> P;
@@ -352,6 +356,9 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
         } else
           functor->rays = assigned[s];
         functor->ray_weight = px_per_m * options.image_to_model_weight;
+        functor->skirt_fixed[0] = fp->skirt[0];
+        functor->skirt_fixed[1] = fp->skirt[1];
+        functor->skirt_block = fit_shape && options.fit_skirt && s == int(BodySegment::kLowerTorso);
         if (!fit_shape) {
           functor->shape_constant = true;
           functor->rest_fixed = fixed_rest;
@@ -363,7 +370,11 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
         }
         const int num_residuals = kind == 0 ? static_cast<int>(functor->samples.size()) : static_cast<int>(functor->rays.size());
         auto* cost = new ceres::DynamicAutoDiffCostFunction<SegmentCost, 18>(functor);
-        const std::vector<double*> blocks = ti::AddSegmentParameterBlocks(body, chains[s], fp, cost);
+        std::vector<double*> blocks = ti::AddSegmentParameterBlocks(body, chains[s], fp, cost);
+        if (functor->skirt_block) {
+          cost->AddParameterBlock(2);
+          blocks.push_back(fp->skirt);
+        }
         cost->SetNumResiduals(num_residuals);
         ceres::LossFunction* loss = kind == 0 ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(options.model_to_image_loss_px))
                                               : new ceres::CauchyLoss(options.image_to_model_loss_px);
@@ -401,6 +412,20 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
     }
   } else {
     problem.SetParameterBlockConstant(fp->shape);
+  }
+  if (problem.HasParameterBlock(fp->skirt)) {
+    // A weak pull towards no skirt; the skirt reaches at most to the ground and flares at most
+    // to a wide dress (both follow the body's scale).
+    const double length_scale = shape_prior[0], girth_scale = shape_prior[ti::kNumShapeGroups];
+    const double max_skirt[2] = {0.9 * length_scale, 0.3 * girth_scale};
+    problem.AddResidualBlock(new ceres::NormalPrior(Eigen::Matrix2d::Identity() * options.skirt_prior_weight,
+                                                    Eigen::Vector2d::Zero()),
+                             nullptr, fp->skirt);
+    for (int i = 0; i < 2; ++i) {
+      fp->skirt[i] = std::clamp(fp->skirt[i], 0.0, max_skirt[i]);
+      problem.SetParameterLowerBound(fp->skirt, i, 0.0);
+      problem.SetParameterUpperBound(fp->skirt, i, max_skirt[i]);
+    }
   }
   const ceres::Solver::Options solver_options = TemplateFitSolverOptions(
       coarse ? std::max(1, options.max_iterations / 2) : options.max_iterations, options.num_threads, 1e-5, 1e-6);
@@ -448,6 +473,8 @@ SilhouetteFitSummary FitTemplateToSilhouettes(const BodyTemplate& body, const Si
     shape_prior[g] = mean_l;
     shape_prior[ti::kNumShapeGroups + g] = mean_g;
   }
+  fp.skirt[0] = shape->skirt_length_m;
+  fp.skirt[1] = shape->skirt_flare_m;
   for (int k = 0; k < 3; ++k) fp.root_t[k] = pose->root_translation[k];
   fp.root_reference = ti::AngleAxisMatrix(pose->root_rotation.data());
   body.ClampToLimits(pose);
@@ -482,6 +509,8 @@ SilhouetteFitSummary FitTemplateToSilhouettes(const BodyTemplate& body, const Si
       shape->length_scale[s] = length[s];
       shape->girth_scale[s] = girth[s];
     }
+    shape->skirt_length_m = fp.skirt[0];
+    shape->skirt_flare_m = fp.skirt[1];
   }
   // Residual statistics at the solution.
   {

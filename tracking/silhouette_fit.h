@@ -35,6 +35,8 @@ struct SilhouetteFitOptions {
   double image_to_model_weight = 1.5;   // relative weight of the image -> model term
   double prior_weight = 2.0;       // weight (per radian) of the prior towards the initial joint angles
   double shape_prior_weight = 20.0;     // weight of the prior towards equal (uniform) scales
+  bool fit_skirt = true;           // with fit_shape: also optimise BodyShape's skirt length and flare
+  double skirt_prior_weight = 2.0; // weight (per metre) of the prior towards no skirt
   int num_threads = 2;
   // Throws UsageError for out-of-range values.
   void Check() const;

@@ -123,6 +123,7 @@ HullPlacement EstimatePlacementFromHull(const Rig& rig, const std::vector<Image>
 void TrackerOptions::Check() const {
   fit.Check();
   if (init_rounds < 1) throw UsageError("tracking: init_rounds must be >= 1");
+  if (!(skirt_min_iou_gain >= 0 && skirt_min_iou_gain < 1)) throw UsageError("tracking: skirt_min_iou_gain must be in [0, 1)");
   if (!(velocity_damping >= 0 && velocity_damping <= 1.5)) throw UsageError("tracking: velocity_damping must be in [0, 1.5]");
   if (!(bad_frame_iou >= 0 && bad_frame_iou <= 1)) throw UsageError("tracking: bad_frame_iou must be in [0, 1]");
   if (!(empty_mask_fraction >= 0 && empty_mask_fraction < 1)) throw UsageError("tracking: empty_mask_fraction must be in [0, 1)");
@@ -222,20 +223,43 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   shape_options.rounds = options_.init_rounds;
   shape_options.max_iterations = 25;
   shape_options.prior_weight = 0.2;
-  TemplatePose pose = best.pose;
-  SilhouetteFitSummary summary = FitTemplateToSilhouettes(body_, observations, shape_options, &shape_, &pose);
   SilhouetteFitOptions refine = options_.fit;
   refine.prior_weight = 0.2;
   refine.rounds = 2;
   refine.coarse_to_fine = false;
-  const SilhouetteFitSummary refined = FitTemplateToSilhouettes(body_, observations, refine, &shape_, &pose);
-  summary.iterations += refined.iterations;
-  summary.final_cost = refined.final_cost;
-  summary.mean_outside_px = refined.mean_outside_px;
-  summary.mean_contour_px = refined.mean_contour_px;
-  result.pose = pose;
-  result.fit = summary;
-  Evaluate(masks, use, &result);
+  // Two hypotheses: no skirt (the DOF held at zero), and a skirt fitted from a long start (the
+  // shape fit alone does not find a skirt from none). The skirt wins only when its overlap is
+  // clearly better.
+  const BodyShape start_shape = shape_;
+  result.mean_iou = -1.0;
+  for (int skirt_start = 0; skirt_start < (options_.try_skirt ? 2 : 1); ++skirt_start) {
+    TrackedFrame candidate;
+    candidate.frame = frame;
+    candidate.flags = result.flags;
+    BodyShape shape = start_shape;
+    if (skirt_start == 1) {
+      shape.skirt_length_m = 0.5 * shape.length_scale[0];
+      shape.skirt_flare_m = 0.1 * shape.girth_scale[0];
+    }
+    TemplatePose pose = best.pose;
+    SilhouetteFitOptions candidate_options = shape_options;
+    candidate_options.fit_skirt = skirt_start == 1;
+    SilhouetteFitSummary summary = FitTemplateToSilhouettes(body_, observations, candidate_options, &shape, &pose);
+    const SilhouetteFitSummary refined = FitTemplateToSilhouettes(body_, observations, refine, &shape, &pose);
+    summary.iterations += refined.iterations;
+    summary.final_cost = refined.final_cost;
+    summary.mean_outside_px = refined.mean_outside_px;
+    summary.mean_contour_px = refined.mean_contour_px;
+    candidate.pose = pose;
+    candidate.fit = summary;
+    std::swap(shape_, shape);  // Evaluate uses shape_
+    Evaluate(masks, use, &candidate);
+    if (candidate.mean_iou > result.mean_iou + (skirt_start == 1 ? options_.skirt_min_iou_gain : 0.0)) {
+      result = candidate;
+    } else {
+      std::swap(shape_, shape);
+    }
+  }
   result.flags.push_back("initialized");
   initialized_ = true;
   history_.push_back(result.pose);

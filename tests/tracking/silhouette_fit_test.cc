@@ -12,30 +12,12 @@
 namespace confluent {
 namespace {
 
-// A camera at `center` looking at `target`, image y down along -z.
-Camera LookAt(const std::string& name, const Eigen::Vector3d& center, const Eigen::Vector3d& target, int width, int height) {
-  Camera camera;
-  camera.name = name;
-  camera.width = width;
-  camera.height = height;
-  const double f = 1.1 * width;
-  camera.K << f, 0, (width - 1) / 2.0, 0, f, (height - 1) / 2.0, 0, 0, 1;
-  const Eigen::Vector3d z = (target - center).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  camera.rotation.row(0) = x.transpose();
-  camera.rotation.row(1) = y.transpose();
-  camera.rotation.row(2) = z.transpose();
-  camera.translation = -camera.rotation * center;
-  return camera;
-}
-
 Rig RingRig(int n, int width, int height) {
   Rig rig;
   for (int i = 0; i < n; ++i) {
     const double a = 2 * M_PI * i / n + 0.2;
-    rig.cameras.push_back(LookAt("cam" + std::to_string(i), Eigen::Vector3d(3.6 * std::sin(a), 3.6 * std::cos(a), 1.5 + 0.4 * (i % 2)),
-                                 Eigen::Vector3d(0, 0, 1.0), width, height));
+    rig.cameras.push_back(LookAtCamera("cam" + std::to_string(i), Eigen::Vector3d(3.6 * std::sin(a), 3.6 * std::cos(a), 1.5 + 0.4 * (i % 2)),
+                                 Eigen::Vector3d(0, 0, 1.0), width, height, 1.1 * width));
   }
   return rig;
 }
@@ -130,6 +112,9 @@ TEST(SilhouetteFit, InitialisesShapeAndPoseFromTheVisualHull) {
   for (std::size_t j = 0; j < joints.size(); ++j) sum += (joints[j] - expected[j]).norm();
   EXPECT_LT(sum / joints.size(), 0.03);
   EXPECT_GT(result.mean_iou, 0.9);
+  // No skirt where there is none (the skirt hypothesis does not win).
+  EXPECT_EQ(tracker.shape().skirt_length_m, 0.0);
+  EXPECT_EQ(tracker.shape().skirt_flare_m, 0.0);
 }
 
 // The contour rays run through the silhouette's edge, not through the centres of its border
