@@ -451,18 +451,7 @@ SilhouetteFitSummary FitTemplateToSilhouettes(const BodyTemplate& body, const Si
   // Shape: one value per group (left and right share), the mean of the group's segments.
   FitParams fp;
   double shape_prior[kShapeBlockSize];
-  for (int g = 0; g < ti::kNumShapeGroups; ++g) {
-    double l = 0, gi = 0;
-    int n = 0;
-    for (int s = 0; s < kNumBodySegments; ++s)
-      if (ti::kSegmentGroup[s] == g) {
-        l += shape->length_scale[s];
-        gi += shape->girth_scale[s];
-        ++n;
-      }
-    fp.shape[g] = l / n;
-    fp.shape[ti::kNumShapeGroups + g] = gi / n;
-  }
+  ti::ShapeToParams(*shape, fp.shape, fp.skirt);
   // The shape prior: the mean scale of lengths and of girths (a uniformly scaled body).
   double mean_l = 0, mean_g = 0;
   for (int g = 0; g < ti::kNumShapeGroups; ++g) {
@@ -473,8 +462,6 @@ SilhouetteFitSummary FitTemplateToSilhouettes(const BodyTemplate& body, const Si
     shape_prior[g] = mean_l;
     shape_prior[ti::kNumShapeGroups + g] = mean_g;
   }
-  fp.skirt[0] = shape->skirt_length_m;
-  fp.skirt[1] = shape->skirt_flare_m;
   for (int k = 0; k < 3; ++k) fp.root_t[k] = pose->root_translation[k];
   fp.root_reference = ti::AngleAxisMatrix(pose->root_rotation.data());
   body.ClampToLimits(pose);
@@ -503,14 +490,7 @@ SilhouetteFitSummary FitTemplateToSilhouettes(const BodyTemplate& body, const Si
   pose->root_translation = Vector3d(fp.root_t[0], fp.root_t[1], fp.root_t[2]);
   pose->dofs = fp.dofs;
   if (options.fit_shape) {
-    double length[kNumBodySegments], girth[kNumBodySegments];
-    ShapeArrays(fp.shape, length, girth);
-    for (int s = 0; s < kNumBodySegments; ++s) {
-      shape->length_scale[s] = length[s];
-      shape->girth_scale[s] = girth[s];
-    }
-    shape->skirt_length_m = fp.skirt[0];
-    shape->skirt_flare_m = fp.skirt[1];
+    *shape = ti::ParamsToShape(fp.shape, fp.skirt);
   }
   // Residual statistics at the solution.
   {

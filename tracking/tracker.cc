@@ -10,6 +10,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "calib/camera.h"
 #include "calib/rig_check.h"
 #include "core/error.h"
 #include "tracking/overlap.h"
@@ -35,21 +36,6 @@ double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
-}
-
-// `camera` for an image reduced by `downscale` (the size DownscaleMask gives), with the same
-// pixel-centre convention: u' = (u + 0.5) * sx - 0.5.
-Camera ReducedCamera(const Camera& camera, int downscale) {
-  if (downscale <= 1) return camera;
-  Camera out = camera;
-  out.width = std::max(1, camera.width / downscale);
-  out.height = std::max(1, camera.height / downscale);
-  const double sx = static_cast<double>(out.width) / camera.width, sy = static_cast<double>(out.height) / camera.height;
-  out.K.row(0) *= sx;
-  out.K.row(1) *= sy;
-  out.K(0, 2) = (camera.K(0, 2) + 0.5) * sx - 0.5;
-  out.K(1, 2) = (camera.K(1, 2) + 0.5) * sy - 0.5;
-  return out;
 }
 
 std::size_t HashMask(const Image& mask) {
@@ -167,7 +153,9 @@ void Tracker::Evaluate(const std::vector<Image>& masks, const std::vector<bool>&
     const int factor = options_.iou_downscale > 0 ? options_.iou_downscale
                                                   : std::max(1, static_cast<int>(std::lround(masks[c].width / 256.0)));
     // Centre-sampled, like the masks (a conservative fill would add half a reduced pixel all round).
-    const Image rendered = RasterizeClosedMesh(mesh, ReducedCamera(rig_.cameras[c], factor));
+    const Image rendered = RasterizeClosedMesh(
+        mesh, ResizedCamera(rig_.cameras[c], std::max(1, rig_.cameras[c].width / factor),
+                            std::max(1, rig_.cameras[c].height / factor)));
     const Image mask = DownscaleMask(masks[c], factor);
     if (mask.width != rendered.width || mask.height != rendered.height) continue;
     result->camera_iou[c] = MaskIoU(rendered, mask);
