@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "calib/rig_check.h"
+#include "core/error.h"
 #include "tests/support/test_support.h"
 #include "tracking/motion_io.h"
 #include "tracking/overlap.h"
@@ -127,6 +128,17 @@ TEST(SkirtFit, InitialisationFindsTheSkirt) {
   EXPECT_GT(result.mean_iou, 0.88);
   EXPECT_NEAR(tracker.shape().skirt_length_m, truth.skirt_length_m, 0.1);
   EXPECT_NEAR(tracker.shape().skirt_flare_m, truth.skirt_flare_m, 0.04);
+}
+
+TEST(SkirtFit, OutOfRangeSkirtOptionsAreUsageErrors) {
+  SilhouetteFitOptions fit;
+  fit.skirt_prior_weight = -1.0;
+  EXPECT_THROW(fit.Check(), UsageError);
+  TrackerOptions tracker;
+  tracker.skirt_min_iou_gain = 1.0;
+  EXPECT_THROW(tracker.Check(), UsageError);
+  tracker.skirt_min_iou_gain = 0.01;
+  EXPECT_NO_THROW(tracker.Check());
 }
 
 }  // namespace
