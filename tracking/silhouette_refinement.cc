@@ -8,6 +8,7 @@
 
 #include "calib/rig_check.h"
 #include "core/error.h"
+#include "core/mesh_ops.h"
 #include "core/mesh_validation.h"
 #include "deform/cholmod_solver.h"
 #include "deform/laplacian.h"
@@ -28,21 +29,6 @@ bool Inside(const Image& mask, const Eigen::Vector2d& pixel) {
   const int x = static_cast<int>(pixel.x() + 0.5), y = static_cast<int>(pixel.y() + 0.5);  // nearest pixel
   if (x >= mask.width || y >= mask.height) return false;
   return mask.data[static_cast<std::size_t>(y) * mask.width + x] > 127;
-}
-
-// Area-weighted vertex normals (unit; zero for isolated vertices).
-RowMatrixX3d VertexNormals(const RowMatrixX3d& vertices, const RowMatrixX3i& faces) {
-  RowMatrixX3d normals = RowMatrixX3d::Zero(vertices.rows(), 3);
-  for (int f = 0; f < faces.rows(); ++f) {
-    const Eigen::RowVector3d a = vertices.row(faces(f, 0)), b = vertices.row(faces(f, 1)), c = vertices.row(faces(f, 2));
-    const Eigen::RowVector3d face_normal = (b - a).cross(c - a);
-    for (int k = 0; k < 3; ++k) normals.row(faces(f, k)) += face_normal;
-  }
-  for (int v = 0; v < normals.rows(); ++v) {
-    const double norm = normals.row(v).norm();
-    if (norm > 0.0) normals.row(v) /= norm;
-  }
-  return normals;
 }
 
 }  // namespace
@@ -143,7 +129,7 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
   };
   const int threads = std::max(1, std::min<int>(s.options.threads, static_cast<int>(usable.size())));
   for (int round = 0; round < s.options.iterations && !usable.empty(); ++round) {
-    const RowMatrixX3d normals = VertexNormals(mesh.vertices, mesh.faces);
+    const RowMatrixX3d normals = VertexNormals(mesh);
     std::vector<RowMatrixX3d> step_sums(threads, RowMatrixX3d::Zero(n, 3));
     std::vector<std::vector<int>> counts(threads, std::vector<int>(n, 0));
     auto work = [&](int part) {

@@ -110,6 +110,8 @@ void TrackerOptions::Check() const {
   fit.Check();
   if (init_rounds < 1) throw UsageError("tracking: init_rounds must be >= 1");
   if (!(skirt_min_iou_gain >= 0 && skirt_min_iou_gain < 1)) throw UsageError("tracking: skirt_min_iou_gain must be in [0, 1)");
+  if (!(skirt_try_below_iou >= 0 && skirt_try_below_iou <= 1))
+    throw UsageError("tracking: skirt_try_below_iou must be in [0, 1]");
   if (!(velocity_damping >= 0 && velocity_damping <= 1.5)) throw UsageError("tracking: velocity_damping must be in [0, 1.5]");
   if (!(bad_frame_iou >= 0 && bad_frame_iou <= 1)) throw UsageError("tracking: bad_frame_iou must be in [0, 1]");
   if (!(empty_mask_fraction >= 0 && empty_mask_fraction < 1)) throw UsageError("tracking: empty_mask_fraction must be in [0, 1)");
@@ -216,11 +218,12 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   refine.rounds = 2;
   refine.coarse_to_fine = false;
   // Two hypotheses: no skirt (the DOF held at zero), and a skirt fitted from a long start (the
-  // shape fit alone does not find a skirt from none). The skirt wins only when its overlap is
-  // clearly better.
+  // shape fit alone does not find a skirt from none), tried only when the first leaves the
+  // silhouettes poorly explained. The skirt wins only when its overlap is clearly better.
   const BodyShape start_shape = shape_;
   result.mean_iou = -1.0;
   for (int skirt_start = 0; skirt_start < (options_.try_skirt ? 2 : 1); ++skirt_start) {
+    if (skirt_start == 1 && result.mean_iou >= options_.skirt_try_below_iou) break;
     TrackedFrame candidate;
     candidate.frame = frame;
     candidate.flags = result.flags;

@@ -35,6 +35,7 @@ struct TrackerOptions {
   SilhouetteFitOptions fit;        // per-frame fit
   int init_rounds = 3;             // contour rounds of the initial shape-and-pose fit
   bool try_skirt = true;           // initial shape fit also from a long skirt (BodyShape::skirt_*) ...
+  double skirt_try_below_iou = 0.92; // ... when the fit without one has a mean IoU below this (1: always) ...
   double skirt_min_iou_gain = 0.01; // ... kept when its mean IoU beats the fit without by this much
   double velocity_damping = 0.7;   // fraction of the last frame's velocity used for the prediction
   double bad_frame_iou = 0.7;      // mean IoU below this triggers a recovery

@@ -139,6 +139,8 @@ TEST(SkirtFit, OutOfRangeSkirtOptionsAreUsageErrors) {
   EXPECT_THROW(tracker.Check(), UsageError);
   tracker.skirt_min_iou_gain = 0.01;
   EXPECT_NO_THROW(tracker.Check());
+  tracker.skirt_try_below_iou = 1.5;
+  EXPECT_THROW(tracker.Check(), UsageError);
 }
 
 }  // namespace
