@@ -9,6 +9,9 @@
 //   BM_TextureSetFrameHalfVisibility  SetFrame with visibility_scale = 0.5 (depth and feather
 //                          maps at half resolution; not the default, it loses ~0.3 dB)
 //   BM_TextureSetFrameFullMesh  SetFrame with depth maps of the full mesh (visibility_faces = 0)
+//   BM_TextureFrameGlRaster  BM_TextureFrame with raster = kGl (depth maps and G-buffer drawn by
+//                          GL, read back); the default (kAuto) rasterises on the CPU on a software
+//                          GL such as llvmpipe
 // Read the *_median rows.
 
 #include <benchmark/benchmark.h>
@@ -141,6 +144,18 @@ void BM_TextureSetFrameFullMesh(benchmark::State& state) {
   SetFrameLoop(state, GetFixture().Variant("full mesh", options));
 }
 
+void BM_TextureFrameGlRaster(benchmark::State& state) {
+  Fixture& f = GetFixture();
+  ProjectiveTextureOptions options;
+  options.raster = ProjectiveTextureOptions::Raster::kGl;
+  ProjectiveTexturer& texturer = f.Variant("gl raster", options);
+  for (auto _ : state) {
+    texturer.SetFrame(f.mesh.vertices, f.cameras, f.images);
+    RenderResult result = texturer.Render(f.view);
+    benchmark::DoNotOptimize(result.color.data.data());
+  }
+}
+
 #define CONFLUENT_TEXTURE_BENCH(name) \
   BENCHMARK(name)->Unit(benchmark::kMillisecond)->UseRealTime()->Repetitions(5)->ReportAggregatesOnly(true)
 
@@ -150,6 +165,7 @@ CONFLUENT_TEXTURE_BENCH(BM_TextureFrame);
 CONFLUENT_TEXTURE_BENCH(BM_TextureFrame4Views);
 CONFLUENT_TEXTURE_BENCH(BM_TextureSetFrameHalfVisibility);
 CONFLUENT_TEXTURE_BENCH(BM_TextureSetFrameFullMesh);
+CONFLUENT_TEXTURE_BENCH(BM_TextureFrameGlRaster);
 
 }  // namespace
 }  // namespace confluent

@@ -1,27 +1,32 @@
-// ProjectiveTexturer: unstructured-lumigraph projective texturing; GL rasterises, the CPU blends.
+// ProjectiveTexturer: unstructured-lumigraph projective texturing; the mesh is rasterised (on the
+// CPU or with GL), the blending runs on the CPU.
 //
-// SetFrame draws every input camera's depth map (depth buffer only, all cameras before the first
-// read-back, so that llvmpipe bins one camera while it rasterises the previous; cameras with lens
-// distortion go through MeshRenderer for exact distortion), reads them back, and derives each
-// feather map on a worker thread (distance to the mesh outline, to depth discontinuities and to
-// the mask outline) while the next map is read. The depth maps are drawn from a proxy of the mesh
-// (vertex clustering at construction, on the mesh's own vertices, so it follows them): on a
-// software rasteriser their cost is mostly per triangle, in llvmpipe's single-threaded setup.
-// Render rasterises the mesh into a G-buffer (world point, face normal, base colour) with a cheap
-// shader, reads the mesh's projected bounding box back, and blends on the CPU (all cores): each
-// covered pixel skips the cameras its surface faces away from, projects its world point into the
-// others (distortion applied), tests visibility against the depth map (shadow-map style), keeps
-// the best k cameras and samples only their images. A fragment shader on llvmpipe paid for every
-// test of every camera on every pixel (execution masks, no real branches) and was 2-3 times
-// slower.
+// SetFrame makes every input camera's depth map from a proxy of the mesh (vertex clustering at
+// construction, on the mesh's own vertices, so it follows them), its feather map (distance to the
+// mesh outline, to depth discontinuities and to the mask outline, exact up to the feather width)
+// and a copy of its image, per camera on all cores. The depth maps come from the CPU rasteriser
+// (render/cpu_raster.h) by default on a software GL: llvmpipe's per-triangle setup is
+// single-threaded and its read-back costs as much again (8 cameras x 20K faces: ~70 ms there,
+// ~10 ms of CPU here). With GL, all depth maps are drawn before the first read-back (llvmpipe bins
+// one camera while it rasterises the previous) and each feather map is computed while the next
+// map is read. Cameras with lens distortion always go through MeshRenderer (exact distortion).
+// Render rasterises the mesh into face ids and 1 / z (CPU, two row halves in parallel) or into a
+// GL G-buffer (world point, face normal, base colour, read back in the projected bounding box),
+// and blends on the CPU (all cores): each covered pixel skips the cameras its surface faces away
+// from, projects its world point into the others (distortion applied), tests visibility against
+// the depth map (shadow-map style), keeps the best k cameras and samples only their images. A
+// fragment shader on llvmpipe paid for every test of every camera on every pixel (execution masks,
+// no real branches) and was 2-3 times slower.
 
 #include "render/projective_texture.h"
+#include "render/cpu_raster.h"
 #include "render/gl_program.h"
 
 #include <epoxy/gl.h>
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <future>
@@ -30,6 +35,9 @@
 #include <unordered_map>
 #include <unordered_set>
 #include <thread>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "calib/capture.h"
 #include "core/cv_interop.h"
@@ -159,29 +167,116 @@ void WindowDepthToCameraZ(double near_m, double far_m, std::vector<float>* depth
   for (float& d : *depth) d = d >= 1.0f ? 0.0f : static_cast<float>(b / ((2.0 * d - 1.0) - a));
 }
 
+// Asks for transparent huge pages on a large buffer not yet touched (Linux; a hint, ignored
+// elsewhere): the blending reads the depth maps and images of 8 cameras (~70 MB) at scattered
+// places, and with 4 KB pages it waits on TLB misses.
+void AdviseHugePages(void* data, std::size_t bytes) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  constexpr std::uintptr_t kHuge = 2u << 20;
+  const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
+  const std::uintptr_t end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(kHuge - 1);
+  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+#else
+  (void)data;
+  (void)bytes;
+#endif
+}
+
+// Buffers of DepthFeatherMap, kept across frames (large fresh allocations fault in every page).
+struct FeatherScratch {
+  std::vector<float> padded;
+  std::vector<std::uint8_t> padded_mask, not_edge, column;
+  std::vector<std::int32_t> squared_distance, row32, best32;
+  std::vector<std::int16_t> row16, best16;
+};
+
+// The row pass of BandDistance in type T (int16 while 2 cap^2 fits, so that the minima vectorise
+// with SSE2's pminsw; else int32).
+template <typename T>
+void BandDistanceRows(const std::uint8_t* column, int w, int h, int cap, std::int32_t* squared_distance,
+                      std::vector<T>* row_buffer, std::vector<T>* best_buffer) {
+  const int pad = cap;
+  const T cap2 = static_cast<T>(cap * cap);
+  row_buffer->assign(static_cast<std::size_t>(w) + 2 * pad, cap2);
+  best_buffer->resize(static_cast<std::size_t>(w));
+  T* center = row_buffer->data() + pad;
+  T* best = best_buffer->data();
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* g = column + static_cast<std::size_t>(y) * w;
+    for (int x = 0; x < w; ++x) center[x] = static_cast<T>(g[x] * g[x]);
+    for (int x = 0; x < w; ++x) best[x] = center[x];
+    for (int dx = 1; dx < cap; ++dx) {
+      const T d2 = static_cast<T>(dx * dx);
+      const T* left = center - dx;
+      const T* right = center + dx;
+      for (int x = 0; x < w; ++x) best[x] = std::min(best[x], static_cast<T>(std::min(left[x], right[x]) + d2));
+    }
+    std::int32_t* out = squared_distance + static_cast<std::size_t>(y) * w;
+    for (int x = 0; x < w; ++x) out[x] = std::min(best[x], cap2);
+  }
+}
+
+// Squared Euclidean distance from every pixel of a w x h image to the nearest pixel where
+// `not_edge` is 0, exact where the distance is below `cap` (pixels, 1..250), cap^2 elsewhere: a
+// separable transform (column distances capped at `cap`, then the minimum of dx^2 + column^2 over
+// |dx| < cap), linear in the pixels and vectorisable, instead of a full distance transform.
+void BandDistance(const std::uint8_t* not_edge, int w, int h, int cap, std::int32_t* squared_distance,
+                  FeatherScratch* scratch) {
+  std::vector<std::uint8_t>& column = scratch->column;
+  column.resize(static_cast<std::size_t>(w) * h);
+  const std::uint8_t c8 = static_cast<std::uint8_t>(cap);
+  // Down, then up: distance along the column, capped (values <= cap <= 250: no overflow).
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* e = not_edge + static_cast<std::size_t>(y) * w;
+    std::uint8_t* g = column.data() + static_cast<std::size_t>(y) * w;
+    if (y == 0) {
+      for (int x = 0; x < w; ++x) g[x] = e[x] == 0 ? 0 : c8;
+      continue;
+    }
+    const std::uint8_t* above = g - w;
+    for (int x = 0; x < w; ++x) {
+      const std::uint8_t from_above = std::min(static_cast<std::uint8_t>(above[x] + 1), c8);
+      g[x] = e[x] == 0 ? 0 : from_above;
+    }
+  }
+  for (int y = h - 2; y >= 0; --y) {
+    std::uint8_t* g = column.data() + static_cast<std::size_t>(y) * w;
+    const std::uint8_t* below = g + w;
+    for (int x = 0; x < w; ++x) g[x] = std::min(g[x], static_cast<std::uint8_t>(below[x] + 1));
+  }
+  // Along the rows: d^2 = min over dx of dx^2 + column(x + dx)^2; outside the image: cap.
+  if (cap <= 127) {
+    BandDistanceRows(column.data(), w, h, cap, squared_distance, &scratch->row16, &scratch->best16);
+  } else {
+    BandDistanceRows(column.data(), w, h, cap, squared_distance, &scratch->row32, &scratch->best32);
+  }
+}
+
 // Depth and feather map of one camera, interleaved into `out` (2 floats per pixel, w x h):
 // camera z (0 = not covered) and smoothstep(0, feather_px, distance to the nearest outline pixel
 // of the mesh, depth discontinuity or mask outline), 0 outside the mesh or the mask; feather_px in
-// map pixels. Returns the number of covered pixels. Thread-safe (reads only its arguments).
-int DepthFeatherMap(const float* z, int w, int h, const Image& mask, const ProjectiveTextureOptions& options,
-                    double feather_px, float* out) {
+// map pixels. `z` may be nonzero only inside `z_box`. `out` is zero outside *written (the region
+// the previous call wrote), and only the region around the covered pixels is rewritten; *written
+// becomes that region. Returns the number of covered pixels. Thread-safe (reads only its
+// arguments, writes only `out`, *written and *scratch).
+int DepthFeatherMap(const float* z, int w, int h, const PixelBox& z_box, const Image& mask,
+                    const ProjectiveTextureOptions& options, double feather_px, float* out, PixelBox* written,
+                    FeatherScratch* scratch) {
+  for (int y = written->y0; y < written->y1; ++y)
+    std::fill(out + 2 * (static_cast<std::size_t>(y) * w + written->x0),
+              out + 2 * (static_cast<std::size_t>(y) * w + written->x1), 0.0f);
+  *written = PixelBox();
   // Region of interest: covered pixels plus the feather margin.
   int min_x = w, min_y = h, max_x = -1, max_y = -1, count = 0;
-  for (int y = 0; y < h; ++y) {
+  for (int y = std::max(z_box.y0, 0); y < std::min(z_box.y1, h); ++y) {
     const float* row = z + static_cast<std::size_t>(y) * w;
-    float* out_row = out + 2 * static_cast<std::size_t>(y) * w;
-    int row_min = w, row_max = -1, row_count = 0;
-    for (int x = 0; x < w; ++x) {
-      const bool c = row[x] > 0.0f;
-      out_row[2 * x] = row[x];
-      out_row[2 * x + 1] = 0.0f;
-      row_count += c;
-      if (c) {
-        row_min = std::min(row_min, x);
-        row_max = x;
-      }
-    }
+    const int bx0 = std::max(z_box.x0, 0), bx1 = std::min(z_box.x1, w);
+    int row_count = 0;
+    for (int x = bx0; x < bx1; ++x) row_count += row[x] > 0.0f ? 1 : 0;
     if (row_count > 0) {
+      int row_min = bx0, row_max = bx1 - 1;
+      while (!(row[row_min] > 0.0f)) ++row_min;
+      while (!(row[row_max] > 0.0f)) --row_max;
       count += row_count;
       min_x = std::min(min_x, row_min);
       max_x = std::max(max_x, row_max);
@@ -197,6 +292,12 @@ int DepthFeatherMap(const float* z, int w, int h, const Image& mask, const Proje
   const int x0 = std::max(0, min_x - margin), y0 = std::max(0, min_y - margin);
   const int x1 = std::min(w - 1, max_x + margin), y1 = std::min(h - 1, max_y + margin);
   const int rw = x1 - x0 + 1, rh = y1 - y0 + 1;
+  *written = PixelBox{x0, y0, x1 + 1, y1 + 1};
+  for (int y = y0; y <= y1; ++y) {
+    const float* row = z + static_cast<std::size_t>(y) * w;
+    float* out_row = out + 2 * static_cast<std::size_t>(y) * w;
+    for (int x = x0; x <= x1; ++x) out_row[2 * x] = row[x];
+  }
   if (feather_px <= 0.0) {
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) {
@@ -205,43 +306,89 @@ int DepthFeatherMap(const float* z, int w, int h, const Image& mask, const Proje
       }
     return count;
   }
-  // Edge pixels are 0, others 255 (distanceTransform measures the distance to the nearest 0).
-  cv::Mat not_edge(rh, rw, CV_8U, cv::Scalar(255));
-  const float jump = static_cast<float>(options.depth_edge_m);
+  // Edge pixels are 0, others 255. A pixel is an edge when a 4-neighbour differs in coverage, in
+  // depth by more than depth_edge_m (both covered), or in the mask; a covered pixel on the image
+  // border is an edge too (the border is an edge of what the camera sees). Branch-free over a
+  // padded copy: uncovered pixels, and the padding, get depth -1e6 (so that any coverage change is
+  // a depth jump); the mask's padding repeats its border (mask edges near the region's border
+  // are farther than the feather width from any covered pixel).
+  const int pw = rw + 2;
+  std::vector<float>& padded = scratch->padded;
+  padded.assign(static_cast<std::size_t>(pw) * (rh + 2), -1e6f);
+  std::vector<std::uint8_t>& padded_mask = scratch->padded_mask;
   const bool mask_edges = use_mask && options.feather_mask_edges;
+  if (mask_edges) padded_mask.resize(padded.size());
   for (int y = y0; y <= y1; ++y) {
-    std::uint8_t* edge_row = not_edge.ptr<std::uint8_t>(y - y0);
-    for (int x = x0; x <= x1; ++x) {
-      const std::size_t p = static_cast<std::size_t>(y) * w + x;
-      const float d = z[p];
-      const bool c = d > 0.0f;
-      const bool m = mask_edges && mask_data[p] != 0;
-      bool edge = false;
-      const int nx[4] = {x - 1, x + 1, x, x};
-      const int ny[4] = {y, y, y - 1, y + 1};
-      for (int k = 0; k < 4 && !edge; ++k) {
-        if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h) {
-          edge = c;  // the image border is an edge of what the camera sees
-          continue;
-        }
-        const std::size_t q = static_cast<std::size_t>(ny[k]) * w + nx[k];
-        const float dn = z[q];
-        if ((dn > 0.0f) != c) edge = true;
-        else if (c && std::abs(dn - d) > jump) edge = true;
-        else if (mask_edges && (mask_data[q] != 0) != m) edge = true;
-      }
-      if (edge) edge_row[x - x0] = 0;
+    const float* row = z + static_cast<std::size_t>(y) * w;
+    float* prow = padded.data() + static_cast<std::size_t>(y - y0 + 1) * pw + 1;
+    for (int x = x0; x <= x1; ++x) prow[x - x0] = row[x] > 0.0f ? row[x] : -1e6f;
+    if (mask_edges) {
+      const std::uint8_t* mrow = mask_data + static_cast<std::size_t>(y) * w;
+      std::uint8_t* pm = padded_mask.data() + static_cast<std::size_t>(y - y0 + 1) * pw + 1;
+      for (int x = x0; x <= x1; ++x) pm[x - x0] = mrow[x] != 0 ? 1 : 0;
+      pm[-1] = pm[0];
+      pm[rw] = pm[rw - 1];
     }
   }
-  cv::Mat distance;
-  cv::distanceTransform(not_edge, distance, cv::DIST_L2, cv::DIST_MASK_5);
+  if (mask_edges) {
+    std::copy_n(padded_mask.data() + pw, pw, padded_mask.data());
+    std::copy_n(padded_mask.data() + static_cast<std::size_t>(rh) * pw, pw,
+                padded_mask.data() + static_cast<std::size_t>(rh + 1) * pw);
+  }
+  std::vector<std::uint8_t>& not_edge = scratch->not_edge;
+  not_edge.resize(static_cast<std::size_t>(rw) * rh);
+  const float jump = static_cast<float>(options.depth_edge_m);
+  for (int y = 0; y < rh; ++y) {
+    const float* pc = padded.data() + static_cast<std::size_t>(y + 1) * pw + 1;
+    const float* pu = pc - pw;
+    const float* pd = pc + pw;
+    std::uint8_t* edge_row = not_edge.data() + static_cast<std::size_t>(y) * rw;
+    for (int x = 0; x < rw; ++x) {
+      const float d = pc[x];
+      const float m = std::max(std::max(std::abs(pc[x - 1] - d), std::abs(pc[x + 1] - d)),
+                               std::max(std::abs(pu[x] - d), std::abs(pd[x] - d)));
+      edge_row[x] = m > jump ? 0 : 255;
+    }
+    if (mask_edges) {
+      const std::uint8_t* mc = padded_mask.data() + static_cast<std::size_t>(y + 1) * pw + 1;
+      const std::uint8_t* mu = mc - pw;
+      const std::uint8_t* md = mc + pw;
+      for (int x = 0; x < rw; ++x) {
+        const std::uint8_t differs = (mc[x - 1] ^ mc[x]) | (mc[x + 1] ^ mc[x]) | (mu[x] ^ mc[x]) | (md[x] ^ mc[x]);
+        edge_row[x] = differs ? 0 : edge_row[x];
+      }
+    }
+  }
+  // Euclidean distance to the nearest edge pixel, exact below `cap` (feathering saturates there).
+  const int cap = static_cast<int>(std::ceil(feather_px)) + 1;
+  std::vector<std::int32_t>& squared_distance = scratch->squared_distance;
+  squared_distance.resize(static_cast<std::size_t>(rw) * rh);
+  if (cap <= 250) {
+    BandDistance(not_edge.data(), rw, rh, cap, squared_distance.data(), scratch);
+  } else {  // a feather wider than 249 pixels: a full distance transform
+    cv::Mat distance;
+    cv::distanceTransform(cv::Mat(rh, rw, CV_8U, not_edge.data()), distance, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    for (int y = 0; y < rh; ++y)
+      for (int x = 0; x < rw; ++x) {
+        const double d = std::min<double>(distance.at<float>(y, x), cap);
+        squared_distance[static_cast<std::size_t>(y) * rw + x] = static_cast<std::int32_t>(std::lround(d * d));
+      }
+  }
   const float width = static_cast<float>(feather_px);
+  // Feather 1 from distance + 0.5 >= feather_px on: no square root there.
+  const float saturated = std::max(0.0f, width - 0.5f);
+  const std::int32_t saturated_squared = static_cast<std::int32_t>(std::ceil(saturated * saturated));
   for (int y = y0; y <= y1; ++y) {
-    const float* distance_row = distance.ptr<float>(y - y0);
+    const std::int32_t* distance_row = squared_distance.data() + static_cast<std::size_t>(y - y0) * rw;
     for (int x = x0; x <= x1; ++x) {
       const std::size_t p = static_cast<std::size_t>(y) * w + x;
-      // +0.5: an edge pixel itself is half a pixel from the outline.
-      if (covered_in_mask(p)) out[2 * p + 1] = Smoothstep(width, distance_row[x - x0] + 0.5f);
+      float feather = 0.0f;
+      if (covered_in_mask(p)) {
+        const std::int32_t d2 = distance_row[x - x0];
+        // +0.5: an edge pixel itself is half a pixel from the outline.
+        feather = d2 >= saturated_squared ? 1.0f : Smoothstep(width, std::sqrt(static_cast<float>(d2)) + 0.5f);
+      }
+      out[2 * p + 1] = feather;
     }
   }
   return count;
@@ -337,13 +484,8 @@ struct BlendCamera {
   const float* depth_feather = nullptr;   // interleaved (camera z, feather), map_width x map_height
 };
 
-// What the blending reads per output pixel, a rectangle of the G-buffer (row-major, rect_width
-// wide): world point (xyz, w = 1 where covered), normal (xyz) and base colour (RGBA8).
+// What the blending needs besides the surface point: the view and the options.
 struct BlendInput {
-  const float* position = nullptr;
-  const float* normal = nullptr;
-  const std::uint8_t* base = nullptr;
-  int rect_width = 0;
   Eigen::Vector3f view_center;
   float depth_bias = 0, resolution_weight = 0, grazing_cos = 0;
   int best_k = 1;
@@ -356,8 +498,15 @@ float SmoothstepF(float edge1, float x) {
 
 // Camera z of the depth map at the 4 texels around `pixel_in_map` (texel centres at +0.5),
 // the farthest of them; texels outside the map count as 0 (not covered).
+// map_x, map_y >= 0.
 float FarthestDepth(const BlendCamera& camera, float map_x, float map_y) {
-  const int x0 = static_cast<int>(std::floor(map_x - 0.5f)), y0 = static_cast<int>(std::floor(map_y - 0.5f));
+  // floor(map - 0.5) by truncation (map + 0.5 > 0).
+  const int x0 = static_cast<int>(map_x + 0.5f) - 1, y0 = static_cast<int>(map_y + 0.5f) - 1;
+  if (x0 >= 0 && y0 >= 0 && x0 + 1 < camera.map_width && y0 + 1 < camera.map_height) {
+    const float* top = camera.depth_feather + 2 * (static_cast<std::size_t>(y0) * camera.map_width + x0);
+    const float* bottom = top + 2 * static_cast<std::size_t>(camera.map_width);
+    return std::max(std::max(top[0], top[2]), std::max(bottom[0], bottom[2]));
+  }
   float depth = 0.0f;
   for (int dy = 0; dy < 2; ++dy) {
     const int y = y0 + dy;
@@ -390,11 +539,11 @@ Eigen::Vector3f Bilinear(const BlendCamera& camera, float px, float py) {
   return value;
 }
 
-// The blended RGBA8 colour of one covered G-buffer pixel (see the header for the weighting).
+// The blended RGB8 colour of surface point X (world) with unit normal n (towards the view) into
+// out[0..2] (see the header for the weighting); false, and out untouched, when no camera sees X.
 // The cheap tests come first, so that cameras facing away cost little.
-void BlendPixel(const BlendInput& in, const std::vector<BlendCamera>& cameras, std::size_t g, std::uint8_t* out) {
-  const Eigen::Vector3f X(in.position[4 * g], in.position[4 * g + 1], in.position[4 * g + 2]);
-  const Eigen::Vector3f n(in.normal[4 * g], in.normal[4 * g + 1], in.normal[4 * g + 2]);
+bool BlendPixel(const BlendInput& in, const std::vector<BlendCamera>& cameras, const Eigen::Vector3f& X,
+                const Eigen::Vector3f& n, std::uint8_t* out) {
   Eigen::Vector3f to_view = in.view_center - X;
   const float view_distance = std::max(to_view.norm(), 1e-6f);
   to_view /= view_distance;
@@ -408,17 +557,17 @@ void BlendPixel(const BlendInput& in, const std::vector<BlendCamera>& cameras, s
     slot_x[s] = slot_y[s] = 0.0f;
     slot_camera[s] = 0;
   }
-  int count = 0;
+  // Pass 1: the cameras X faces that it projects into, with their depth-map texels prefetched, so
+  // that the cache misses of the cameras overlap instead of following each other.
+  struct Candidate {
+    int camera;
+    float z, px, py, map_x, map_y;
+  };
+  Candidate candidates[kMaxCameras];
+  int num_candidates = 0;
   for (int i = 0; i < static_cast<int>(cameras.size()); ++i) {
     const BlendCamera& camera = cameras[i];
-    Eigen::Vector3f to_camera = camera.center - X;
-    if (!(n.dot(to_camera) > 0.0f)) continue;  // faces away: the cheapest test first
-    const float camera_distance = to_camera.norm();
-    to_camera /= camera_distance;
-    const float facing = n.dot(to_camera);
-    if (!(facing > 0.0f)) continue;
-    float q = in.grazing_cos > 0.0f ? SmoothstepF(in.grazing_cos, facing) : 1.0f;
-    if (!(q > 0.0f)) continue;
+    if (!(n.dot(camera.center - X) > 0.0f)) continue;  // faces away: the cheapest test first
     const Eigen::Vector3f p = camera.rotation * X + camera.translation;
     if (!(p.z() > 1e-6f)) continue;
     float xn = p.x() / p.z(), yn = p.y() / p.z();
@@ -432,14 +581,36 @@ void BlendPixel(const BlendInput& in, const std::vector<BlendCamera>& cameras, s
     }
     const float px = camera.fx * xn + camera.skew * yn + camera.cx, py = camera.fy * yn + camera.cy;
     if (!(px >= -0.5f && py >= -0.5f && px <= camera.width - 0.5f && py <= camera.height - 0.5f)) continue;
+    Candidate& candidate = candidates[num_candidates++];
+    candidate = Candidate{i, p.z(), px, py, (px + 0.5f) * camera.map_scale_x, (py + 0.5f) * camera.map_scale_y};
+    const int x0 = std::min(static_cast<int>(candidate.map_x), camera.map_width - 1);
+    const int y0 = std::min(static_cast<int>(candidate.map_y + 0.5f), camera.map_height - 1);
+    const float* texel = camera.depth_feather + 2 * (static_cast<std::size_t>(y0) * camera.map_width + x0);
+    __builtin_prefetch(texel);
+    __builtin_prefetch(texel - 2 * static_cast<std::ptrdiff_t>(camera.map_width) * (y0 > 0 ? 1 : 0));
+  }
+  // Pass 2: visibility, feathering (which reject occluded cameras before any square root), the
+  // penalties, and the best k + 1 kept in order.
+  int count = 0;
+  for (int k = 0; k < num_candidates; ++k) {
+    const Candidate& candidate = candidates[k];
+    const int i = candidate.camera;
+    const BlendCamera& camera = cameras[i];
+    const float px = candidate.px, py = candidate.py, map_x = candidate.map_x, map_y = candidate.map_y;
     // Shadow-map test against the farthest of the 4 surrounding depth texels (lenient on slanted
     // surfaces; occlusion edges are feathered anyway), feather from the nearest texel.
-    const float map_x = (px + 0.5f) * camera.map_scale_x, map_y = (py + 0.5f) * camera.map_scale_y;
     const float depth = FarthestDepth(camera, map_x, map_y);
-    if (!(depth > 0.0f) || p.z() > depth + in.depth_bias) continue;
-    const int tx = std::clamp(static_cast<int>(std::floor(map_x)), 0, camera.map_width - 1);
-    const int ty = std::clamp(static_cast<int>(std::floor(map_y)), 0, camera.map_height - 1);
+    if (!(depth > 0.0f) || candidate.z > depth + in.depth_bias) continue;
+    const int tx = std::min(static_cast<int>(map_x), camera.map_width - 1);  // floor: map_x >= 0
+    const int ty = std::min(static_cast<int>(map_y), camera.map_height - 1);
     const float feather = camera.depth_feather[2 * (static_cast<std::size_t>(ty) * camera.map_width + tx) + 1];
+    if (!(feather > 0.0f)) continue;
+    Eigen::Vector3f to_camera = camera.center - X;
+    const float camera_distance = to_camera.norm();
+    to_camera /= camera_distance;
+    const float facing = n.dot(to_camera);
+    if (!(facing > 0.0f)) continue;
+    float q = in.grazing_cos > 0.0f ? SmoothstepF(in.grazing_cos, facing) : 1.0f;
     q *= feather;
     if (!(q > 0.0f)) continue;
     // Angle between the rays: sqrt(2 - 2 cos) is the chord, within 5% of the angle below 60 deg.
@@ -471,13 +642,9 @@ void BlendPixel(const BlendInput& in, const std::vector<BlendCamera>& cameras, s
     sum += w * Bilinear(camera, slot_x[s], slot_y[s]).cwiseProduct(camera.gain);
     total += w;
   }
-  if (total > 0.0f) {
-    for (int c = 0; c < 3; ++c)
-      out[c] = static_cast<std::uint8_t>(std::clamp(sum[c] / total, 0.0f, 255.0f) + 0.5f);
-  } else {
-    for (int c = 0; c < 3; ++c) out[c] = in.base[4 * g + c];
-  }
-  out[3] = 255;
+  if (!(total > 0.0f)) return false;
+  for (int c = 0; c < 3; ++c) out[c] = static_cast<std::uint8_t>(std::clamp(sum[c] / total, 0.0f, 255.0f) + 0.5f);
+  return true;
 }
 
 }  // namespace
@@ -538,7 +705,22 @@ struct ProjectiveTexturer::Impl {
     int width = 0, height = 0;
   };
   std::vector<DepthTarget> depth_targets;
-  std::vector<float> scratch;
+  RowMatrixX3f positions;  // the current frame's vertices in single precision
+  // The CPU rasterisers (options.raster; null when GL draws): the depth maps' faces (proxy) and
+  // all faces (the G-buffer); per worker thread, the projected vertices.
+  bool cpu_raster = false;
+  std::unique_ptr<CpuRasterizer> depth_rasterizer, view_rasterizer;
+  std::vector<CpuRasterFrame> raster_frames;
+  std::vector<PixelBox> feather_written;  // per camera: where the last feather map wrote
+  std::vector<PixelBox> z_written;        // per camera: where camera_z may be nonzero
+  std::vector<FeatherScratch> feather_scratch;  // per worker (CPU raster) or per camera (GL)
+  // The novel view on the CPU: the mesh's faces and vertex colours (clamped to [0, 1]), and per
+  // pixel 1 / z and the face drawn (-1 = none), nonzero only inside view_written.
+  RowMatrixX3i mesh_faces;
+  RowMatrixX3f vertex_colors;
+  std::vector<float> view_inverse_depth;
+  std::vector<std::int32_t> view_face_ids;
+  PixelBox view_written;
   std::vector<std::uint8_t> readback;
   std::vector<std::vector<float>> camera_z;       // per camera: depth map read back
   std::vector<std::vector<float>> depth_feather;  // per camera: interleaved depth and feather
@@ -566,6 +748,8 @@ struct ProjectiveTexturer::Impl {
     num_vertices = mesh.num_vertices();
     num_faces = mesh.num_faces();
     has_colors = mesh.has_colors();
+    mesh_faces = mesh.faces;
+    if (has_colors) vertex_colors = mesh.colors.cast<float>().cwiseMax(0.0f).cwiseMin(1.0f);
     context.MakeCurrent();
     gbuffer_program = LinkProgram(kVertexShader, kGBufferFragmentShader, "projective texture (G-buffer)");
     depth_program = LinkProgram(kDepthVertexShader, kDepthFragmentShader, "projective texture (depth maps)");
@@ -619,6 +803,16 @@ struct ProjectiveTexturer::Impl {
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
                  indices.data(), GL_STATIC_DRAW);
     glBindVertexArray(0);
+    cpu_raster = options.raster == ProjectiveTextureOptions::Raster::kCpu ||
+                 (options.raster == ProjectiveTextureOptions::Raster::kAuto && context.info().software);
+    if (cpu_raster) {
+      CpuRasterOptions raster;
+      raster.near_m = renderer_options.near_m;
+      raster.far_m = renderer_options.far_m;
+      raster.cull_back_faces = options.cull_back_faces;
+      depth_rasterizer = std::make_unique<CpuRasterizer>(mesh_topology.faces, num_vertices, raster);
+      view_rasterizer = std::make_unique<CpuRasterizer>(mesh.faces, num_vertices, raster);
+    }
     UploadPositions(mesh.vertices);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
@@ -667,12 +861,12 @@ struct ProjectiveTexturer::Impl {
     if (mesh.has_colors() && !mesh.colors.allFinite()) throw InputError("mesh", "vertex colours contain NaN");
   }
 
+  // Keeps the vertices in single precision and, when GL draws, uploads them.
   void UploadPositions(const RowMatrixX3d& vertices) {
-    scratch.resize(static_cast<std::size_t>(num_vertices) * 3);
-    for (int v = 0; v < num_vertices; ++v)
-      for (int k = 0; k < 3; ++k) scratch[3 * v + k] = static_cast<float>(vertices(v, k));
+    positions = vertices.cast<float>();
+    if (cpu_raster) return;
     glBindBuffer(GL_ARRAY_BUFFER, position_buffer);
-    glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(scratch.size() * sizeof(float)), scratch.data());
+    glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(positions.size() * sizeof(float)), positions.data());
   }
 
   // Draws the window depth of the mesh (current vertex buffer) in undistorted camera `i` into its
@@ -820,74 +1014,134 @@ struct ProjectiveTexturer::Impl {
     context.MakeCurrent();
     UploadPositions(vertices);
 
-    // Depth maps on the GPU (one camera after the other); each camera's feather map is computed
-    // on a worker thread while the next depth map renders.
+    // Per camera: the depth map (GL or the CPU rasteriser), the feather map and the copy of the
+    // image the blending reads.
     camera_z.resize(std::max<std::size_t>(camera_z.size(), n));
     depth_feather.resize(std::max<std::size_t>(depth_feather.size(), n));
-    std::vector<CameraFrame> frames(n);
-    std::vector<std::future<int>> feathers(n);
+    feather_written.resize(std::max<std::size_t>(feather_written.size(), n));
+    z_written.resize(std::max<std::size_t>(z_written.size(), n));
     vis_cameras.clear();
     for (const Camera& camera : input_cameras) vis_cameras.push_back(Scaled(camera, options.visibility_scale));
     const double feather_px = options.feather_px * options.visibility_scale;
-    bool distortion_vertices_set = false;
     static const Image kNoMask;
     scaled_masks.resize(n);
-    for (int i = 0; i < n; ++i)
-      if (!vis_cameras[i].has_distortion()) DrawDepth(i, vis_cameras[i]);
-    try {
-      for (int i = 0; i < n; ++i) {
-        const Camera& camera = vis_cameras[i];
-        bool window_depth = false;
-        if (camera.has_distortion()) {
-          if (!distortion_renderer) {
-            distortion_renderer = std::make_unique<MeshRenderer>(renderer_options);
-            mesh_handle = distortion_renderer->AddMesh(mesh_topology, "mesh");
-          }
-          if (!distortion_vertices_set) distortion_renderer->UpdateVertices(mesh_handle, vertices);
-          distortion_vertices_set = true;
-          RenderRequest request;
-          request.color = false;
-          request.depth = true;
-          request.cull_back_faces = options.cull_back_faces;
-          const Image depth = distortion_renderer->Render(camera, request).depth;
-          camera_z[i].assign(depth.ptr<float>(), depth.ptr<float>() + depth.data.size() / sizeof(float));
-          context.MakeCurrent();
-        } else {
-          ReadDepth(i, camera, &camera_z[i]);
-          window_depth = true;
+    frame_images.resize(n);
+    std::vector<int> visible(n, 0);
+    // How camera_z[i] was filled: 0 = to be drawn by the CPU rasteriser, 1 = GL window depth,
+    // 2 = camera z (distorted cameras, MeshRenderer).
+    std::vector<int> source(n, 0);
+    auto process = [&](int i, CpuRasterFrame* raster_frame, FeatherScratch* scratch) {
+      const Camera& camera = vis_cameras[i];
+      const std::size_t pixels = static_cast<std::size_t>(camera.width) * camera.height;
+      PixelBox z_box{0, 0, camera.width, camera.height};
+      if (source[i] == 0) {
+        // CPU: clear only what the last frame drew, draw 1 / z, convert inside the drawn box.
+        std::vector<float>& z = camera_z[i];
+        if (z.size() != pixels) {
+          z.assign(pixels, 0.0f);
+          z_written[i] = PixelBox();
         }
-        depth_feather[i].resize(static_cast<std::size_t>(camera.width) * camera.height * 2);
-        const Image& mask = masks.empty() ? kNoMask : masks[i];
-        const Image& map_mask = ScaledMask(mask, camera.width, camera.height, &scaled_masks[i]);
-        feathers[i] = std::async(std::launch::async, [this, i, &camera, &map_mask, feather_px, window_depth] {
-          if (window_depth) WindowDepthToCameraZ(renderer_options.near_m, renderer_options.far_m, &camera_z[i]);
-          return DepthFeatherMap(camera_z[i].data(), camera.width, camera.height, map_mask, options, feather_px,
-                                 depth_feather[i].data());
-        });
+        for (int y = z_written[i].y0; y < z_written[i].y1; ++y)
+          std::fill(z.data() + static_cast<std::size_t>(y) * camera.width + z_written[i].x0,
+                    z.data() + static_cast<std::size_t>(y) * camera.width + z_written[i].x1, 0.0f);
+        depth_rasterizer->Project(camera, positions, raster_frame);
+        z_box = depth_rasterizer->Draw(*raster_frame, 0, camera.height, z.data());
+        for (int y = z_box.y0; y < z_box.y1; ++y) {
+          float* row = z.data() + static_cast<std::size_t>(y) * camera.width;
+          for (int x = z_box.x0; x < z_box.x1; ++x) row[x] = row[x] > 0.0f ? 1.0f / row[x] : 0.0f;
+        }
+      } else if (source[i] == 1) {
+        WindowDepthToCameraZ(renderer_options.near_m, renderer_options.far_m, &camera_z[i]);
       }
+      z_written[i] = z_box;
+      if (depth_feather[i].size() != 2 * pixels) {
+        std::vector<float>().swap(depth_feather[i]);
+        depth_feather[i].reserve(2 * pixels);
+        AdviseHugePages(depth_feather[i].data(), 2 * pixels * sizeof(float));
+        depth_feather[i].assign(2 * pixels, 0.0f);
+        feather_written[i] = PixelBox();
+      }
+      const Image& mask = masks.empty() ? kNoMask : masks[i];
+      const Image& map_mask = ScaledMask(mask, camera.width, camera.height, &scaled_masks[i]);
+      visible[i] = DepthFeatherMap(camera_z[i].data(), camera.width, camera.height, z_box, map_mask, options,
+                                   feather_px, depth_feather[i].data(), &feather_written[i], scratch);
+      // The blending reads the images on the CPU: keep them (the caller's may go away).
+      if (frame_images[i].data.capacity() < rgb[i]->data.size()) {
+        std::vector<std::uint8_t>().swap(frame_images[i].data);
+        frame_images[i].data.reserve(rgb[i]->data.size());
+        AdviseHugePages(frame_images[i].data.data(), rgb[i]->data.size());
+      }
+      if (rgb[i] == &converted[i]) frame_images[i] = std::move(converted[i]);
+      else frame_images[i] = *rgb[i];
+    };
+    // Cameras with lens distortion: MeshRenderer (exact distortion), on this thread (GL).
+    bool distortion_vertices_set = false;
+    auto render_distorted = [&](int i) {
+      if (!distortion_renderer) {
+        distortion_renderer = std::make_unique<MeshRenderer>(renderer_options);
+        mesh_handle = distortion_renderer->AddMesh(mesh_topology, "mesh");
+      }
+      if (!distortion_vertices_set) distortion_renderer->UpdateVertices(mesh_handle, vertices);
+      distortion_vertices_set = true;
+      RenderRequest request;
+      request.color = false;
+      request.depth = true;
+      request.cull_back_faces = options.cull_back_faces;
+      const Image depth = distortion_renderer->Render(vis_cameras[i], request).depth;
+      camera_z[i].assign(depth.ptr<float>(), depth.ptr<float>() + depth.data.size() / sizeof(float));
+      source[i] = 2;
+      context.MakeCurrent();
+    };
+    std::vector<std::future<void>> jobs;
+    try {
+      if (cpu_raster) {
+        // Distorted cameras first (GL, this thread), then every camera's maps on all workers.
+        for (int i = 0; i < n; ++i)
+          if (vis_cameras[i].has_distortion()) render_distorted(i);
+        const int workers = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, std::min(n, 8));
+        raster_frames.resize(std::max<std::size_t>(raster_frames.size(), std::max(workers, 1)));
+        feather_scratch.resize(std::max<std::size_t>(feather_scratch.size(), std::max(workers, 1)));
+        std::atomic<int> next{0};
+        auto work = [&](int worker) {
+          for (int i = next++; i < n; i = next++) process(i, &raster_frames[worker], &feather_scratch[worker]);
+        };
+        for (int worker = 1; worker < workers; ++worker) jobs.push_back(std::async(std::launch::async, work, worker));
+        work(0);
+      } else {
+        // GL: all undistorted depth maps are drawn before the first read-back (llvmpipe bins one
+        // camera while it rasterises the previous); each camera's feather map is computed on a
+        // worker thread while the next map is read.
+        for (int i = 0; i < n; ++i)
+          if (!vis_cameras[i].has_distortion()) DrawDepth(i, vis_cameras[i]);
+        feather_scratch.resize(std::max<std::size_t>(feather_scratch.size(), n));
+        for (int i = 0; i < n; ++i) {
+          if (vis_cameras[i].has_distortion()) {
+            render_distorted(i);
+          } else {
+            ReadDepth(i, vis_cameras[i], &camera_z[i]);
+            source[i] = 1;
+          }
+          jobs.push_back(std::async(std::launch::async, process, i, nullptr, &feather_scratch[i]));
+        }
+      }
+      for (std::future<void>& job : jobs) job.get();
     } catch (...) {
-      for (std::future<int>& feather : feathers)
-        if (feather.valid()) feather.wait();
+      for (std::future<void>& job : jobs)
+        if (job.valid()) job.wait();
       throw;
     }
+    std::vector<CameraFrame> frames(n);
     info = TextureFrameInfo();
     for (int i = 0; i < n; ++i) {
       frames[i].camera = input_cameras[i];
       frames[i].map_camera = vis_cameras[i];
       frames[i].depth_feather = depth_feather[i].data();
-      frames[i].image = rgb[i];
-      frames[i].visible_pixels = feathers[i].get();
-      info.visible_pixels.push_back(frames[i].visible_pixels);
+      frames[i].image = &frame_images[i];
+      frames[i].visible_pixels = visible[i];
+      info.visible_pixels.push_back(visible[i]);
     }
     gains = options.colour_balance ? FitGains(vertices, frames) : std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Ones());
     info.colour_gains = gains;
-
-    // The blending reads the images on the CPU: keep them (the caller's may go away).
-    frame_images.resize(n);
-    for (int i = 0; i < n; ++i) {
-      if (rgb[i] == &converted[i]) frame_images[i] = std::move(converted[i]);
-      else frame_images[i] = *rgb[i];
-    }
     cameras = input_cameras;
     SetBlendCameras();
     frame_set = true;
@@ -934,7 +1188,7 @@ struct ProjectiveTexturer::Impl {
     const Eigen::Matrix<double, 3, 4> pixel_from_world = K * cam_from_world.topRows<3>();
     double min_x = 1e30, min_y = 1e30, max_x = -1e30, max_y = -1e30;
     for (int v = 0; v < num_vertices; ++v) {
-      const Eigen::Vector3d X(scratch[3 * v], scratch[3 * v + 1], scratch[3 * v + 2]);
+      const Eigen::Vector3d X = positions.row(v).transpose().cast<double>();
       const Eigen::Vector3d p = pixel_from_world * X.homogeneous();
       if (!(p.z() > renderer_options.near_m)) return PixelRect{0, 0, width, height};
       const double x = p.x() / p.z(), y = p.y() / p.z();
@@ -1003,11 +1257,170 @@ struct ProjectiveTexturer::Impl {
       width = map->width;
       height = map->height;
     }
-    EnsureFramebuffer(width, height);
-    glViewport(0, 0, width, height);
     const Eigen::Matrix4d cam_from_world = CamFromWorld(view);
     // Both passes (and the clears) only touch the pixels the mesh can cover.
     const PixelRect rect = CoveredRect(cam_from_world, K, width, height);
+    if (cpu_raster) {
+      Camera ideal = view;  // the buffer's pinhole camera (the view itself when undistorted)
+      ideal.K = K;
+      ideal.width = width;
+      ideal.height = height;
+      ideal.dist.setZero();
+      RenderCpu(ideal, rect);
+    } else {
+      RenderGl(view, K, width, height, cam_from_world, rect);
+    }
+    return Composite(view, width, height, map, want_silhouette);
+  }
+
+  // The blending's view-dependent input.
+  BlendInput MakeBlendInput(const Camera& view) const {
+    BlendInput in;
+    in.view_center = view.center_in_world().cast<float>();
+    in.depth_bias = static_cast<float>(options.depth_bias_m + proxy_bias_m);
+    in.resolution_weight = static_cast<float>(options.resolution_weight);
+    in.grazing_cos = static_cast<float>(options.grazing_cos);
+    in.best_k = options.best_k;
+    return in;
+  }
+
+  // Calls row(y) for y in [0, rows) on all workers (this thread and the others), in bands of rows
+  // interleaved over the workers so that each gets a share of the mesh.
+  template <typename RowFunction>
+  static void ForRowBands(int rows, const RowFunction& row) {
+    constexpr int kBand = 8;
+    const int workers = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 8);
+    auto run = [&](int worker) {
+      for (int band = worker * kBand; band < rows; band += workers * kBand)
+        for (int y = band; y < std::min(band + kBand, rows); ++y) row(y);
+    };
+    std::vector<std::future<void>> others;
+    for (int worker = 1; worker < workers; ++worker) others.push_back(std::async(std::launch::async, run, worker));
+    std::exception_ptr error;
+    try {
+      run(0);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    for (std::future<void>& other : others) {
+      try {
+        other.get();
+      } catch (...) {
+        if (!error) error = std::current_exception();
+      }
+    }
+    if (error) std::rethrow_exception(error);
+  }
+
+  // Render on the CPU into `readback` (ideal pinhole buffer `ideal`, RGBA8): the mesh rasterised
+  // into face ids and 1 / z (two row halves on two threads), then per covered pixel the world point
+  // from the pixel's ray, the face normal and the blending; the mesh's colour where no camera sees.
+  void RenderCpu(const Camera& ideal, const PixelRect& rect) {
+    const int width = ideal.width, height = ideal.height;
+    const std::size_t pixels = static_cast<std::size_t>(width) * height;
+    readback.assign(pixels * 4, 0);
+    if (view_inverse_depth.size() != pixels) {
+      view_inverse_depth.assign(pixels, 0.0f);
+      view_face_ids.assign(pixels, -1);
+      view_written = PixelBox();
+    }
+    for (int y = view_written.y0; y < view_written.y1; ++y) {
+      const std::size_t row = static_cast<std::size_t>(y) * width;
+      std::fill(view_inverse_depth.begin() + row + view_written.x0, view_inverse_depth.begin() + row + view_written.x1,
+                0.0f);
+      std::fill(view_face_ids.begin() + row + view_written.x0, view_face_ids.begin() + row + view_written.x1, -1);
+    }
+    view_written = PixelBox();
+    if (rect.x1 <= rect.x0 || rect.y1 <= rect.y0) return;
+    if (raster_frames.empty()) raster_frames.resize(1);
+    CpuRasterFrame& frame = raster_frames[0];
+    view_rasterizer->Project(ideal, positions, &frame);
+    // Two halves of the covered rows, drawn in parallel.
+    const int middle = (rect.y0 + rect.y1) / 2;
+    PixelBox boxes[2];
+    auto draw = [&](int half) {
+      boxes[half] = view_rasterizer->Draw(frame, half == 0 ? rect.y0 : middle, half == 0 ? middle : rect.y1,
+                                          view_inverse_depth.data(), view_face_ids.data());
+    };
+    std::future<void> other = std::async(std::launch::async, draw, 1);
+    try {
+      draw(0);
+    } catch (...) {
+      other.wait();
+      throw;
+    }
+    other.get();
+    for (const PixelBox& box : boxes) {
+      if (box.empty()) continue;
+      if (view_written.empty()) {
+        view_written = box;
+      } else {
+        view_written.x0 = std::min(view_written.x0, box.x0);
+        view_written.y0 = std::min(view_written.y0, box.y0);
+        view_written.x1 = std::max(view_written.x1, box.x1);
+        view_written.y1 = std::max(view_written.y1, box.y1);
+      }
+    }
+    if (view_written.empty()) return;
+    // Ray of pixel (u, v) in the world: D0 + u Du + v Dv (camera z = 1); X = C + z ray.
+    const Eigen::Matrix3d world_from_pixel = ideal.rotation.transpose() * ideal.K.inverse();
+    const Eigen::Vector3f Du = world_from_pixel.col(0).cast<float>(), Dv = world_from_pixel.col(1).cast<float>();
+    const Eigen::Vector3f D0 = world_from_pixel.col(2).cast<float>();
+    const Eigen::Vector3f C = ideal.center_in_world().cast<float>();
+    const BlendInput in = MakeBlendInput(ideal);
+    const Eigen::Vector3f fallback = options.fallback_color.cast<float>();
+    const PixelBox box = view_written;
+    auto blend_row = [&](int row) {
+      const int y = box.y0 + row;
+      const std::size_t offset = static_cast<std::size_t>(y) * width;
+      int cached_face = -1;
+      Eigen::Vector3f n = Eigen::Vector3f::Zero();
+      for (int x = box.x0; x < box.x1; ++x) {
+        const int face = view_face_ids[offset + x];
+        if (face < 0) continue;
+        const Eigen::Vector3f X = C + (D0 + static_cast<float>(x) * Du + static_cast<float>(y) * Dv) /
+                                          view_inverse_depth[offset + x];
+        const int a = mesh_faces(face, 0), b = mesh_faces(face, 1), c = mesh_faces(face, 2);
+        auto vertex = [&](int v) { return Eigen::Vector3f(positions.row(v).transpose()); };
+        if (face != cached_face) {
+          const Eigen::Vector3f A = vertex(a);
+          n = (vertex(b) - A).cross(vertex(c) - A);
+          const float length = n.norm();
+          n = length > 0.0f ? Eigen::Vector3f(n / length) : Eigen::Vector3f((C - X).normalized());
+          cached_face = face;
+        }
+        const Eigen::Vector3f facing_n = n.dot(C - X) < 0.0f ? Eigen::Vector3f(-n) : n;
+        std::uint8_t* out = readback.data() + 4 * (offset + x);
+        if (!BlendPixel(in, blend_cameras, X, facing_n, out)) {
+          Eigen::Vector3f base = fallback;
+          if (has_colors) {
+            // Barycentric coordinates of X in the face (its plane), as GL interpolates colours.
+            const Eigen::Vector3f A = vertex(a), e1 = vertex(b) - A, e2 = vertex(c) - A, d = X - A;
+            const float d11 = e1.dot(e1), d12 = e1.dot(e2), d22 = e2.dot(e2), d1 = d.dot(e1), d2 = d.dot(e2);
+            const float det = d11 * d22 - d12 * d12;
+            float wb = 1.0f / 3.0f, wc = 1.0f / 3.0f;
+            if (det > 0.0f) {
+              wb = std::clamp((d22 * d1 - d12 * d2) / det, 0.0f, 1.0f);
+              wc = std::clamp((d11 * d2 - d12 * d1) / det, 0.0f, 1.0f - wb);
+            }
+            base = (1.0f - wb - wc) * vertex_colors.row(a).transpose() + wb * vertex_colors.row(b).transpose() +
+                   wc * vertex_colors.row(c).transpose();
+          }
+          for (int k = 0; k < 3; ++k)
+            out[k] = static_cast<std::uint8_t>(std::lround(255.0f * std::clamp(base[k], 0.0f, 1.0f)));
+        }
+        out[3] = 255;
+      }
+    };
+    ForRowBands(box.y1 - box.y0, blend_row);
+  }
+
+  // Render with GL into `readback` (buffer width x height with intrinsics K, RGBA8): the mesh into
+  // a G-buffer, read back, blended on the CPU.
+  void RenderGl(const Camera& view, const Eigen::Matrix3d& K, int width, int height,
+                const Eigen::Matrix4d& cam_from_world, const PixelRect& rect) {
+    EnsureFramebuffer(width, height);
+    glViewport(0, 0, width, height);
     glEnable(GL_SCISSOR_TEST);
     glScissor(rect.x0, rect.y0, rect.x1 - rect.x0, rect.y1 - rect.y0);
 
@@ -1053,35 +1466,26 @@ struct ProjectiveTexturer::Impl {
       glReadBuffer(GL_COLOR_ATTACHMENT2);
       glReadPixels(rect.x0, rect.y0, rect_width, rect_height, GL_RGBA, GL_UNSIGNED_BYTE, gbuffer_base.data());
       CheckGl("rendering view " + view.name);
-      BlendInput in;
-      in.position = gbuffer_position.data();
-      in.normal = gbuffer_normal.data();
-      in.base = gbuffer_base.data();
-      in.rect_width = rect_width;
-      in.view_center = view.center_in_world().cast<float>();
-      in.depth_bias = static_cast<float>(options.depth_bias_m + proxy_bias_m);
-      in.resolution_weight = static_cast<float>(options.resolution_weight);
-      in.grazing_cos = static_cast<float>(options.grazing_cos);
-      in.best_k = options.best_k;
-      // Bands of rows, interleaved over the workers so that each gets a share of the mesh.
-      constexpr int kBand = 8;
-      const int workers = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 8);
-      auto blend_rows = [&](int worker) {
-        for (int band = worker * kBand; band < rect_height; band += workers * kBand)
-          for (int y = band; y < std::min(band + kBand, rect_height); ++y)
-            for (int x = 0; x < rect_width; ++x) {
-              const std::size_t g = static_cast<std::size_t>(y) * rect_width + x;
-              if (gbuffer_position[4 * g + 3] == 0.0f) continue;  // not covered
-              BlendPixel(in, blend_cameras, g,
-                         readback.data() + 4 * (static_cast<std::size_t>(rect.y0 + y) * width + rect.x0 + x));
-            }
+      const BlendInput in = MakeBlendInput(view);
+      auto blend_row = [&](int y) {
+        for (int x = 0; x < rect_width; ++x) {
+          const std::size_t g = static_cast<std::size_t>(y) * rect_width + x;
+          if (gbuffer_position[4 * g + 3] == 0.0f) continue;  // not covered
+          const float* P = gbuffer_position.data() + 4 * g;
+          const float* N = gbuffer_normal.data() + 4 * g;
+          std::uint8_t* out = readback.data() + 4 * (static_cast<std::size_t>(rect.y0 + y) * width + rect.x0 + x);
+          if (!BlendPixel(in, blend_cameras, Eigen::Vector3f(P[0], P[1], P[2]), Eigen::Vector3f(N[0], N[1], N[2]), out))
+            std::copy_n(gbuffer_base.data() + 4 * g, 3, out);
+          out[3] = 255;
+        }
       };
-      std::vector<std::future<void>> others;
-      for (int worker = 1; worker < workers; ++worker) others.push_back(std::async(std::launch::async, blend_rows, worker));
-      blend_rows(0);
-      for (std::future<void>& other : others) other.get();
+      ForRowBands(rect_height, blend_row);
     }
+  }
 
+  // The output image of `view` from `readback` (width x height, RGBA8 premultiplied by coverage):
+  // remapped through the distortion map when there is one, the background composited.
+  RenderResult Composite(const Camera& view, int width, int height, const ViewMap* map, bool want_silhouette) {
     RenderResult result;
     cv::Mat rgba(height, width, CV_8UC4, readback.data());
     cv::Mat out_rgba;

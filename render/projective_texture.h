@@ -71,6 +71,13 @@ struct ProjectiveTextureOptions {
   // a 24K-face proxy), ground-truth geometry: held-out PSNR unchanged (31.74 dB). 0 = always draw
   // the full mesh.
   int visibility_faces = 20000;
+  // Where the depth maps (cameras without lens distortion) and the novel views' G-buffer are
+  // rasterised. kAuto: on the CPU (render/cpu_raster.h, both cores) when the GL context is a
+  // software one (llvmpipe: its per-triangle setup is single-threaded and dearer than the CPU
+  // rasteriser, and reading its buffers back costs as much again), with GL on a GPU. The images
+  // agree to float rounding (same coverage rule and depth interpolation).
+  enum class Raster { kAuto, kCpu, kGl };
+  Raster raster = Raster::kAuto;
   bool colour_balance = false;  // fit and apply per-camera RGB gains
   int colour_balance_samples = 20000;  // surface points (vertices) sampled for the gain fit
   // Colour of surface no camera sees when the mesh has no vertex colours, RGB in [0,1].
@@ -90,8 +97,9 @@ struct TextureFrameInfo {
 // Textures one mesh from a set of input cameras, frame by frame. Per frame, SetFrame renders the
 // input cameras' depth maps, feather maps and (optionally) colour gains once and keeps a copy of
 // the images; Render then draws any number of novel views (the mesh into a G-buffer, then the
-// blending once per covered pixel, on the CPU threads). Owns GL state (its own EGL context plus a
-// MeshRenderer); not thread-safe.
+// blending once per covered pixel, on the CPU threads). Rasterisation runs on the CPU or with GL
+// (ProjectiveTextureOptions::raster; the CPU on a software GL). Owns GL state (its own EGL context
+// plus a MeshRenderer for input cameras with lens distortion); not thread-safe.
 class ProjectiveTexturer {
  public:
   // `mesh` gives the topology (faces), the fallback vertex colours (if any) and the initial
