@@ -206,7 +206,7 @@ CommandSpec MakeRunCommand() {
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
       {"masks", "DIR", "use these masks DIR/<cam>/<frame>.png instead of extracting silhouettes"},
       {"no-refine", "", "keep the deformed scan as Confluent Motion gives it (no silhouette refinement)"},
-      {"refine-iterations", "N", "rounds of silhouette refinement per frame (default 12)"},
+      {"refine-iterations", "N", "rounds of silhouette refinement per frame (default 18)"},
       {"no-render", "", "skip the 3D-video render stage"},
       {"render-width", "PX", "width of the orbit video (default 960)"},
       {"render-height", "PX", "height of the orbit video (default 720)"},

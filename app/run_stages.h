@@ -27,7 +27,7 @@ struct RunInputs {
   std::string correspondences_path;  // empty: automatic registration and correspondences
   int threads = 2;
   bool refine_silhouettes = true;    // pull the animated scan onto the used cameras' masks
-  int refine_iterations = 12;        // rounds of the silhouette refinement per frame
+  int refine_iterations = 18;        // rounds of the silhouette refinement per frame
 };
 
 // How much a stage did.

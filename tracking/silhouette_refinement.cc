@@ -18,7 +18,7 @@ namespace confluent {
 
 void SilhouetteRefinementOptions::Check() const {
   if (iterations < 0 || !(search_px > 0.0) || !(max_rim_cosine > 0.0 && max_rim_cosine < 1.0) ||
-      !(spread_stiffness > 0.0) || !(fade_weight > 0.0) || threads < 1)
+      !(spread_stiffness > 0.0) || !(fade_weight > 0.0) || !(step_gain > 0.0) || threads < 1)
     std::abort();
 }
 
@@ -128,6 +128,18 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
     return s.closed ? RasterizeClosedMesh(posed, camera) : RasterizeSilhouette(posed, camera);
   };
   const int threads = std::max(1, std::min<int>(s.options.threads, static_cast<int>(usable.size())));
+  // Mean IoU over the usable cameras.
+  auto mean_over_usable = [&usable](const std::vector<double>& iou) {
+    double sum = 0.0;
+    for (int c : usable) sum += iou[c];
+    return usable.empty() ? 0.0 : sum / usable.size();
+  };
+  // Each move is the spread rim steps times `gain`. A move after which the mean IoU drops is
+  // replaced by half of it, and the gain halved (a backtracking line search).
+  double gain = s.options.step_gain;
+  RowMatrixX3d before_move = mesh.vertices, move = RowMatrixX3d::Zero(n, 3);
+  std::vector<double> iou(cameras.size(), NAN), iou_before_move = iou;
+  double mean_iou_before_move = -1.0;
   for (int round = 0; round < s.options.iterations && !usable.empty(); ++round) {
     const RowMatrixX3d normals = VertexNormals(mesh);
     std::vector<RowMatrixX3d> step_sums(threads, RowMatrixX3d::Zero(n, 3));
@@ -136,7 +148,7 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
       for (std::size_t i = part; i < usable.size(); i += threads) {
         const int c = usable[i];
         const Image own = silhouette(mesh, cameras[c]);
-        if (round == 0) summary.iou_before[c] = MaskIoU(own, masks[c]);
+        iou[c] = MaskIoU(own, masks[c]);
         s.RimSteps(mesh, normals, cameras[c], own, masks[c], &step_sums[part], &counts[part]);
       }
     };
@@ -144,7 +156,14 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
     for (int part = 1; part < threads; ++part) helpers.emplace_back(work, part);
     work(0);
     for (std::thread& helper : helpers) helper.join();
-    // Normalised diffusion: D = S(w step) / (S(w) + fade), S = gamma (L + gamma I)^-1.
+    if (round == 0) summary.iou_before = iou;
+    const double mean_iou = mean_over_usable(iou);
+    if (mean_iou < mean_iou_before_move) {
+      gain *= 0.5;
+      mesh.vertices = before_move + gain * move;
+      continue;
+    }
+    // Normalised diffusion of the mean rim steps: D = S(w step) / (S(w) + fade), S = gamma (L + gamma I)^-1.
     Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 4);
     summary.rim_vertices = 0;
     for (int v = 0; v < n; ++v) {
@@ -157,13 +176,21 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
       ++summary.rim_vertices;
     }
     const Eigen::MatrixXd spread = s.spread.Solve(rhs);
+    before_move = mesh.vertices;
+    iou_before_move = iou;
+    mean_iou_before_move = mean_iou;
     for (int v = 0; v < n; ++v) {
       const Eigen::RowVector3d step = spread.block<1, 3>(v, 0) / (spread(v, 3) + s.options.fade_weight);
-      if (step.allFinite()) mesh.vertices.row(v) += step;
+      move.row(v) = step.allFinite() ? step : Eigen::RowVector3d::Zero();
     }
+    mesh.vertices += gain * move;
   }
-  for (int c : usable)
-    summary.iou_after[c] = MaskIoU(silhouette(mesh, cameras[c]), masks[c]);
+  for (int c : usable) iou[c] = MaskIoU(silhouette(mesh, cameras[c]), masks[c]);
+  if (!usable.empty() && mean_over_usable(iou) < mean_iou_before_move) {  // the last move made it worse
+    mesh.vertices = before_move;
+    iou = iou_before_move;
+  }
+  summary.iou_after = iou;
   const Eigen::VectorXd shift = (mesh.vertices - start).rowwise().norm();
   summary.mean_shift_m = n ? shift.mean() : 0.0;
   summary.max_shift_m = n ? shift.maxCoeff() : 0.0;

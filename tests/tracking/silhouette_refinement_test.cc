@@ -24,16 +24,29 @@ double SphereError(const RowMatrixX3d& vertices) {
   return (vertices.rowwise().norm().array() - 0.3).abs().mean();
 }
 
-TEST(SilhouetteRefinement, PullsAnOffsetShrunkSphereOntoTheSilhouettes) {
-  const Mesh truth = MakeUvSphere(0.3, 48, 96);
+// The true sphere (radius 0.3 m at the origin) seen by 6 ring cameras, alternately low and
+// high, and a start that is too small and off centre.
+struct OffsetSphere {
+  Mesh truth = MakeUvSphere(0.3, 48, 96);
   std::vector<Camera> cameras;
   std::vector<Image> masks;
-  for (int k = 0; k < 6; ++k) {
-    cameras.push_back(RingCamera(2.0 * M_PI * k / 6, k % 2 ? 0.8 : -0.4));
-    masks.push_back(RasterizeClosedMesh(truth, cameras.back()));
+  Mesh start;
+  OffsetSphere() {
+    for (int k = 0; k < 6; ++k) {
+      cameras.push_back(RingCamera(2.0 * M_PI * k / 6, k % 2 ? 0.8 : -0.4));
+      masks.push_back(RasterizeClosedMesh(truth, cameras.back()));
+    }
+    start = truth;
+    start.vertices = (0.93 * truth.vertices).rowwise() + Eigen::RowVector3d(0.03, -0.02, 0.01);
   }
-  Mesh start = truth;
-  start.vertices = (0.93 * truth.vertices).rowwise() + Eigen::RowVector3d(0.03, -0.02, 0.01);
+};
+
+TEST(SilhouetteRefinement, PullsAnOffsetShrunkSphereOntoTheSilhouettes) {
+  const OffsetSphere sphere;
+  const Mesh& truth = sphere.truth;
+  const std::vector<Camera>& cameras = sphere.cameras;
+  const std::vector<Image>& masks = sphere.masks;
+  const Mesh& start = sphere.start;
   SilhouetteRefiner refiner(start);
   SilhouetteRefinementSummary summary;
   const RowMatrixX3d refined = refiner.Refine(start.vertices, cameras, masks, &summary);
@@ -52,6 +65,34 @@ TEST(SilhouetteRefinement, PullsAnOffsetShrunkSphereOntoTheSilhouettes) {
   refined_mesh.vertices = refined;
   EXPECT_GT(MaskIoU(RasterizeClosedMesh(refined_mesh, unseen), unseen_mask),
             MaskIoU(RasterizeClosedMesh(start, unseen), unseen_mask) + 0.05);
+}
+
+// Far too large a step overshoots; the line search takes such rounds back at half the gain, so
+// the refinement still converges and never ends below where it started.
+TEST(SilhouetteRefinement, OvershootingStepsAreTakenBack) {
+  const OffsetSphere sphere;
+  const std::vector<Camera>& cameras = sphere.cameras;
+  const std::vector<Image>& masks = sphere.masks;
+  const Mesh& start = sphere.start;
+  RowMatrixX3d refined;
+  auto mean_iou_after = [&](double gain, int iterations) {
+    SilhouetteRefinementOptions options;
+    options.step_gain = gain;
+    options.iterations = iterations;
+    SilhouetteRefinementSummary summary;
+    refined = SilhouetteRefiner(start, options).Refine(start.vertices, cameras, masks, &summary);
+    double sum = 0.0;
+    for (double iou : summary.iou_after) sum += iou;
+    return sum / summary.iou_after.size();
+  };
+  // One round at gain 6 overshoots: it is taken back, so the result is the start itself.
+  double before = 0.0;
+  for (std::size_t c = 0; c < cameras.size(); ++c) before += MaskIoU(RasterizeClosedMesh(start, cameras[c]), masks[c]);
+  before /= cameras.size();
+  EXPECT_NEAR(mean_iou_after(6.0, 1), before, 1e-12);
+  EXPECT_EQ(refined, start.vertices);
+  // With rounds to spare, the halved gain gets there.
+  EXPECT_GT(mean_iou_after(6.0, 12), 0.98);
 }
 
 TEST(RasterizeClosedMesh, SphereCoversItsProjectedDisc) {
