@@ -73,21 +73,25 @@ std::vector<Image> ImagesOf(GroundTruth* truth, const std::vector<Camera>& camer
   return images;
 }
 
-TEST(ProjectiveTexturer, HeldOutViewReproducesTheColours) {
-  const Mesh real = ColouredSphere();
-  GroundTruth truth(real);
-  const std::vector<Camera> ring = Ring(8);
+// The coloured sphere seen by a ring of 8 cameras: the usual input of the texturer.
+struct SphereCapture {
+  Mesh real = ColouredSphere();
+  GroundTruth truth{real};
+  std::vector<Camera> ring = Ring(8);
   std::vector<Image> masks;
-  const std::vector<Image> images = ImagesOf(&truth, ring, &masks);
+  std::vector<Image> images = ImagesOf(&truth, ring, &masks);
+};
 
+TEST(ProjectiveTexturer, HeldOutViewReproducesTheColours) {
+  SphereCapture sphere;
   const Mesh black = FlatSphere(0, 0, 0);  // fallback colours that would ruin the score
   ProjectiveTexturer texturer(black);
-  texturer.SetFrame(black.vertices, ring, images, masks);
+  texturer.SetFrame(black.vertices, sphere.ring, sphere.images, sphere.masks);
   for (int visible : texturer.frame_info().visible_pixels) EXPECT_GT(visible, 2000);
 
   // Held out: between two ring cameras, higher up.
   for (const Camera& heldout : {RingCamera("heldout_a", 22.5, 2.0), RingCamera("heldout_b", 200.0, 0.9)}) {
-    const RenderResult expected = truth.Render(heldout);
+    const RenderResult expected = sphere.truth.Render(heldout);
     const RenderResult rendered = texturer.Render(heldout, /*want_silhouette=*/true);
     ASSERT_EQ(rendered.color.width, 160);
     ASSERT_EQ(rendered.silhouette.height, 120);
@@ -102,7 +106,7 @@ TEST(ProjectiveTexturer, HeldOutViewReproducesTheColours) {
     EXPECT_GT(psnr, 32.0) << heldout.name;
   }
   // Rendering into an input camera reproduces its image almost exactly.
-  const double self = MaskedPsnr(images[3], texturer.Render(ring[3]).color, masks[3]);
+  const double self = MaskedPsnr(sphere.images[3], texturer.Render(sphere.ring[3]).color, sphere.masks[3]);
   EXPECT_GT(self, 38.0);
 }
 
@@ -213,19 +217,15 @@ TEST(ProjectiveTexturer, DistortedCamerasOnBothSides) {
 TEST(ProjectiveTexturer, ViewsThatCropTheMeshOrHaveItBehindThem) {
   // The blending pass only runs inside the mesh's projected bounding box; close views crop the
   // box at the image border, and a view with mesh vertices behind it uses the whole image.
-  const Mesh real = ColouredSphere();
-  GroundTruth truth(real);
-  const std::vector<Camera> ring = Ring(8);
-  std::vector<Image> masks;
-  const std::vector<Image> images = ImagesOf(&truth, ring, &masks);
-  ProjectiveTexturer texturer(real);
-  texturer.SetFrame(real.vertices, ring, images, masks);
+  SphereCapture sphere;
+  ProjectiveTexturer texturer(sphere.real);
+  texturer.SetFrame(sphere.real.vertices, sphere.ring, sphere.images, sphere.masks);
   const Eigen::Vector3d eye = kCentre + Eigen::Vector3d(0.75, 0.0, 0.1);
   for (const Camera& view :
        {LookAtCamera("close", eye, kCentre, 160, 120, 170),
         LookAtCamera("off_centre", eye, kCentre + Eigen::Vector3d(0, 0.6, 0), 160, 120, 170),
         LookAtCamera("sideways", eye, eye + Eigen::Vector3d(-0.4, 1.0, 0.0), 160, 120, 80)}) {
-    const RenderResult expected = truth.Render(view);
+    const RenderResult expected = sphere.truth.Render(view);
     const RenderResult rendered = texturer.Render(view, /*want_silhouette=*/true);
     int differing = 0, covered = 0;
     for (std::size_t p = 0; p < rendered.silhouette.data.size(); ++p) {
@@ -240,22 +240,18 @@ TEST(ProjectiveTexturer, ViewsThatCropTheMeshOrHaveItBehindThem) {
 }
 
 TEST(ProjectiveTexturer, HalfResolutionVisibilityStaysClose) {
-  const Mesh real = ColouredSphere();
-  GroundTruth truth(real);
-  const std::vector<Camera> ring = Ring(8);
-  std::vector<Image> masks;
-  const std::vector<Image> images = ImagesOf(&truth, ring, &masks);
+  SphereCapture sphere;
   ProjectiveTextureOptions options;
   options.visibility_scale = 0.5;
-  ProjectiveTexturer half(real, options), full(real);
-  half.SetFrame(real.vertices, ring, images, masks);
-  full.SetFrame(real.vertices, ring, images, masks);
+  ProjectiveTexturer half(sphere.real, options), full(sphere.real);
+  half.SetFrame(sphere.real.vertices, sphere.ring, sphere.images, sphere.masks);
+  full.SetFrame(sphere.real.vertices, sphere.ring, sphere.images, sphere.masks);
   // Depth maps at a quarter of the pixels see a quarter of the covered pixels.
-  for (std::size_t i = 0; i < ring.size(); ++i)
+  for (std::size_t i = 0; i < sphere.ring.size(); ++i)
     EXPECT_NEAR(half.frame_info().visible_pixels[i], full.frame_info().visible_pixels[i] / 4.0,
                 0.05 * full.frame_info().visible_pixels[i] / 4.0);
   const Camera heldout = RingCamera("heldout", 22.5, 2.0);
-  const RenderResult expected = truth.Render(heldout);
+  const RenderResult expected = sphere.truth.Render(heldout);
   const RenderResult rendered = half.Render(heldout, true);
   const Image mask = UnionMask(expected.silhouette, rendered.silhouette);
   EXPECT_GT(MaskedPsnr(expected.color, rendered.color, mask), 32.0);
@@ -360,17 +356,13 @@ TEST(ProjectiveTexturer, CpuAndGlRasterisationAgree) {
 
 TEST(ProjectiveTexturer, WideFeatherStillBlends) {
   // Feathering wider than the band distance handles (250 px) takes the full distance transform.
-  const Mesh real = ColouredSphere();
-  GroundTruth truth(real);
-  const std::vector<Camera> ring = Ring(8);
-  std::vector<Image> masks;
-  const std::vector<Image> images = ImagesOf(&truth, ring, &masks);
+  SphereCapture sphere;
   ProjectiveTextureOptions options;
   options.feather_px = 300.0;
-  ProjectiveTexturer texturer(real, options);
-  texturer.SetFrame(real.vertices, ring, images, masks);
+  ProjectiveTexturer texturer(sphere.real, options);
+  texturer.SetFrame(sphere.real.vertices, sphere.ring, sphere.images, sphere.masks);
   const Camera view = RingCamera("between", 22.5, 1.5);
-  const RenderResult expected = truth.Render(view);
+  const RenderResult expected = sphere.truth.Render(view);
   const RenderResult rendered = texturer.Render(view, true);
   EXPECT_GT(MaskedPsnr(expected.color, rendered.color, UnionMask(expected.silhouette, rendered.silhouette)), 30.0);
 }
