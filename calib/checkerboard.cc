@@ -124,6 +124,15 @@ void Canonicalize(const cv::Mat& gray, const CheckerboardSpec& board, std::vecto
   if (half_turn) HalfTurnCorners(corners);
 }
 
+// Scales pixel positions by (sx, sy) between an image and a resized copy of it (pixel centres
+// at integers in both).
+void ScalePixelCentres(double sx, double sy, std::vector<cv::Point2f>* points) {
+  for (auto& p : *points) {
+    p.x = static_cast<float>((p.x + 0.5) * sx - 0.5);
+    p.y = static_cast<float>((p.y + 0.5) * sy - 0.5);
+  }
+}
+
 double MinSpacing(const std::vector<cv::Point2f>& points, int cols, int rows) {
   double best = 1e30;
   for (int row = 0; row < rows; ++row)
@@ -348,10 +357,7 @@ bool DetectCheckerboard(const Image& image, const CheckerboardSpec& board, const
       found = cv::findChessboardCornersSB(stretched, pattern, points, cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
       if (!found) continue;
       // Back to the unstretched image (pixel centres at integers in both).
-      for (auto& p : points) {
-        p.x = static_cast<float>((p.x + 0.5) / stretch[0] - 0.5);
-        p.y = static_cast<float>((p.y + 0.5) / stretch[1] - 0.5);
-      }
+      ScalePixelCentres(1.0 / stretch[0], 1.0 / stretch[1], &points);
       refine_scale[0] = stretch[0];
       refine_scale[1] = stretch[1];
       refined = true;  // findChessboardCornersSB's accuracy refinement, in the stretched copy
@@ -369,10 +375,7 @@ bool DetectCheckerboard(const Image& image, const CheckerboardSpec& board, const
   const bool stretched = refine_scale[0] != 1.0 || refine_scale[1] != 1.0;
   if (stretched) {
     cv::resize(gray, refine_image, cv::Size(), refine_scale[0], refine_scale[1], cv::INTER_CUBIC);
-    for (auto& p : points) {
-      p.x = static_cast<float>((p.x + 0.5) * refine_scale[0] - 0.5);
-      p.y = static_cast<float>((p.y + 0.5) * refine_scale[1] - 0.5);
-    }
+    ScalePixelCentres(refine_scale[0], refine_scale[1], &points);
   }
   if (!refined || options.subpix_half_window_px > 0) {
     int half = options.subpix_half_window_px;
@@ -393,11 +396,7 @@ bool DetectCheckerboard(const Image& image, const CheckerboardSpec& board, const
       points = detected;
     }
   }
-  if (stretched)
-    for (auto& p : points) {
-      p.x = static_cast<float>((p.x + 0.5) / refine_scale[0] - 0.5);
-      p.y = static_cast<float>((p.y + 0.5) / refine_scale[1] - 0.5);
-    }
+  if (stretched) ScalePixelCentres(1.0 / refine_scale[0], 1.0 / refine_scale[1], &points);
   corners_px->reserve(points.size());
   for (const auto& p : points) corners_px->emplace_back(p.x, p.y);
   Canonicalize(gray, board, corners_px);

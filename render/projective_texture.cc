@@ -491,11 +491,6 @@ struct BlendInput {
   int best_k = 1;
 };
 
-float SmoothstepF(float edge1, float x) {
-  const float t = std::clamp(x / edge1, 0.0f, 1.0f);
-  return t * t * (3.0f - 2.0f * t);
-}
-
 // Camera z of the depth map at the 4 texels around `pixel_in_map` (texel centres at +0.5),
 // the farthest of them; texels outside the map count as 0 (not covered).
 // map_x, map_y >= 0.
@@ -610,8 +605,7 @@ bool BlendPixel(const BlendInput& in, const std::vector<BlendCamera>& cameras, c
     to_camera /= camera_distance;
     const float facing = n.dot(to_camera);
     if (!(facing > 0.0f)) continue;
-    float q = in.grazing_cos > 0.0f ? SmoothstepF(in.grazing_cos, facing) : 1.0f;
-    q *= feather;
+    float q = Smoothstep(in.grazing_cos, facing) * feather;  // 1 when grazing_cos is 0 (off)
     if (!(q > 0.0f)) continue;
     // Angle between the rays: sqrt(2 - 2 cos) is the chord, within 5% of the angle below 60 deg.
     const float angle = std::sqrt(std::max(2.0f - 2.0f * to_view.dot(to_camera), 0.0f));

@@ -145,8 +145,9 @@ std::vector<bool> Tracker::UsableCameras(const std::vector<Image>& masks, std::v
   return use;
 }
 
-void Tracker::Evaluate(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result) const {
-  const Mesh mesh = body_.PosedMesh(shape_, result->pose);
+void Tracker::Evaluate(const BodyShape& shape, const std::vector<Image>& masks, const std::vector<bool>& use,
+                       TrackedFrame* result) const {
+  const Mesh mesh = body_.PosedMesh(shape, result->pose);
   result->camera_iou.assign(rig_.size(), -1.0);
   double sum = 0;
   int n = 0;
@@ -203,7 +204,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
       pose.dofs[kTjRightShoulder] = {0.0, -arm, 0.0};
       BodyShape shape = shape_;
       candidate.fit = FitTemplateToSilhouettes(body_, observations, hypothesis_options, &shape, &pose);
-      Evaluate(masks, use, &candidate);
+      Evaluate(shape_, masks, use, &candidate);
       if (candidate.mean_iou > best.mean_iou) best = candidate;
     }
   }
@@ -243,12 +244,10 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
     summary.mean_contour_px = refined.mean_contour_px;
     candidate.pose = pose;
     candidate.fit = summary;
-    std::swap(shape_, shape);  // Evaluate uses shape_
-    Evaluate(masks, use, &candidate);
+    Evaluate(shape, masks, use, &candidate);
     if (candidate.mean_iou > result.mean_iou + (skirt_start == 1 ? options_.skirt_min_iou_gain : 0.0)) {
       result = candidate;
-    } else {
-      std::swap(shape_, shape);
+      shape_ = shape;
     }
   }
   result.flags.push_back("initialized");
@@ -284,7 +283,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   if (hashes == last_mask_hashes_) {
     result.pose = history_.back();
     result.flags.push_back("duplicate");
-    Evaluate(masks, use, &result);
+    Evaluate(shape_, masks, use, &result);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     return result;
@@ -306,7 +305,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);
   result.pose = predicted;
   result.fit = FitTemplateToSilhouettes(body_, observations, options_.fit, &shape_, &result.pose, &predicted);
-  Evaluate(masks, use, &result);
+  Evaluate(shape_, masks, use, &result);
   // Bad-frame detection and recovery: re-fit from the neighbouring accepted poses.
   std::vector<double> recent(iou_history_.end() - std::min<std::size_t>(iou_history_.size(), 10), iou_history_.end());
   const double reference = Median(recent);
@@ -323,7 +322,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
       candidate.pose = history_[history_.size() - back];
       const TemplatePose start_pose = candidate.pose;
       candidate.fit = FitTemplateToSilhouettes(body_, observations, recover, &shape_, &candidate.pose, &start_pose);
-      Evaluate(masks, use, &candidate);
+      Evaluate(shape_, masks, use, &candidate);
       if (candidate.mean_iou > result.mean_iou) {
         candidate.flags = result.flags;
         result = candidate;

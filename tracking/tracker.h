@@ -81,7 +81,8 @@ class Tracker {
 
  private:
   std::vector<bool> UsableCameras(const std::vector<Image>& masks, std::vector<std::string>* flags) const;
-  void Evaluate(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result) const;
+  void Evaluate(const BodyShape& shape, const std::vector<Image>& masks, const std::vector<bool>& use,
+                TrackedFrame* result) const;
 
   Rig rig_;
   std::vector<bool> excluded_;
