@@ -165,6 +165,28 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   };
   const std::string gt_meshes = args.get("gt-meshes");
 
+  // What the rendered views are seen over: each held-out camera's clean plate (as the camera saw
+  // the studio), or black.
+  const std::string background_mode = args.get("background").empty() ? "plate" : args.get("background");
+  if (background_mode != "plate" && background_mode != "black")
+    throw UsageError("--background: expected plate or black, got '" + background_mode + "'");
+  std::vector<Image> plates(heldout.size());
+  bool over_plates = background_mode == "plate";
+  for (std::size_t h = 0; h < heldout.size() && over_plates; ++h) {
+    const std::string path = capture.BackgroundPath(heldout[h]);
+    if (path.empty()) {
+      warnings.push_back("no clean plate for held-out camera " + rig.cameras[heldout[h]].name +
+                         " (background/): views are scored over black");
+      over_plates = false;
+    } else {
+      plates[h] = ToRgb8(ReadImage(path));
+    }
+  }
+  auto seen_over_background = [&](RenderResult rendered, std::size_t h) {
+    if (over_plates) rendered.color = CompositeOverBackground(rendered, plates[h], capture.BackgroundPath(heldout[h]));
+    return rendered;
+  };
+
   // Geometry present in the run.
   const bool has_scan = fs::exists(run.ScanPath(range.first));
   std::vector<int> frames, missing;
@@ -225,12 +247,12 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
       row.camera = camera.name;
       row.frame = frame;
       row.vertex_error_m = vertex_error;
-      const RenderResult rendered_template = template_texturer->Render(camera, true);
+      const RenderResult rendered_template = seen_over_background(template_texturer->Render(camera, true), h);
       Image region;  // of the best geometry: the scan when there is one
       row.templ = Score(rendered_template, real, truth, &region);
       std::optional<RenderResult> rendered_scan;
       if (scan) {
-        rendered_scan = scan_texturer->Render(camera, true);
+        rendered_scan = seen_over_background(scan_texturer->Render(camera, true), h);
         row.scan = Score(*rendered_scan, real, truth, &region);
       }
       const RenderResult& best = rendered_scan ? *rendered_scan : rendered_template;
@@ -291,6 +313,7 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   summary.heldout = args.get_all("heldout");
   summary.frames = static_cast<int>(frames.size());
   summary.has_scan = has_scan;
+  summary.background = over_plates ? "clean plate" : "black";
   summary.scan = {Mean(scan_iou), Min(scan_iou),   Mean(scan_xor),    Mean(scan_psnr),
                   Mean(scan_ssim), Mean(scan_box), Mean(scan_inside), Mean(scan_share)};
   summary.templ = {Mean(template_iou),  Min(template_iou),  Mean(template_xor),    Mean(template_psnr),
@@ -376,7 +399,9 @@ CommandSpec MakeEvaluateCommand() {
       "silhouette IoU and XOR error (% of the true silhouette area), and PSNR/SSIM computed inside the union\n"
       "of the true and the rendered silhouette (pixels outside both are background in both and are not\n"
       "counted); also, as psnr_box, the PSNR in the bounding box of that union with the pixels outside it\n"
-      "black in both images (the Neural Body / ZJU-MoCap convention). The error split: psnr_inside, the PSNR\n"
+      "black in both images (the Neural Body / ZJU-MoCap convention). The rendered views are seen over the\n"
+      "held-out camera's clean plate (CAPTURE/background/<cam>.png) when the capture has one, as the camera\n"
+      "saw the studio; --background black draws them over black. The error split: psnr_inside, the PSNR\n"
       "inside the intersection of the two silhouettes (texture alone), and xor_error_share, the share of the\n"
       "squared error in the union on pixels only one silhouette covers (silhouette mismatch).\n"
       "True silhouettes come from --masks DIR, else from the run's extracted masks (RUN/masks).\n"
@@ -389,6 +414,7 @@ CommandSpec MakeEvaluateCommand() {
       {"heldout", "NAME", "held-out camera to score", true, true},
       {"masks", "DIR", "true silhouettes DIR/<cam>/<frame>.png (default: the run's masks)"},
       {"gt-meshes", "DIR", "ground-truth meshes DIR/<frame>.ply with the scan's topology: vertex error"},
+      {"background", "plate|black", "what the rendered views are seen over (default plate: the held-out camera's clean plate)"},
       {"frames", "A:B", "frame range, B exclusive (default: all)"},
       {"every", "N", "score every N-th frame (default 1)"},
       {"side-by-side-every", "N", "write side-by-side pictures every N scored frames (default 10; 0 = none)"},

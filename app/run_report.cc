@@ -57,6 +57,7 @@ nlohmann::json EvaluationSummary::ToJson() const {
   json["frames"] = frames;
   json["masking"] = "PSNR and SSIM over the union of the true and the rendered silhouette; IoU and XOR over the whole image; "
                     "psnr_box: PSNR in the bounding box of the union, pixels outside the union black in both images";
+  json["background"] = background;
   if (has_scan) json["scan"] = ScoresJson(scan);
   json["template"] = ScoresJson(templ);
   json["scan_vertex_error_mean_m"] = JsonNumber(vertex_error_mean_m);
@@ -71,6 +72,7 @@ EvaluationSummary EvaluationSummary::Read(const std::string& path) {
     summary.heldout = json.at("heldout_cameras").get<std::vector<std::string>>();
     summary.frames = json.at("frames").get<int>();
     summary.has_scan = json.contains("scan");
+    summary.background = json.value("background", std::string("black"));
     if (summary.has_scan) summary.scan = ScoresFromJson(json.at("scan"));
     summary.templ = ScoresFromJson(json.at("template"));
     summary.vertex_error_mean_m = FromJson(json.at("scan_vertex_error_mean_m"));
@@ -85,7 +87,8 @@ std::string SummaryTable(const EvaluationSummary& summary) {
   std::ostringstream out;
   std::string cameras;
   for (const std::string& name : summary.heldout) cameras += (cameras.empty() ? "" : ", ") + name;
-  out << "held-out evaluation (" << cameras << "; " << summary.frames << " frames)\n";
+  out << "held-out evaluation (" << cameras << "; " << summary.frames << " frames; views over "
+      << (summary.background == "clean plate" ? "the clean plates" : summary.background) << ")\n";
   char line[160];
   std::snprintf(line, sizeof line, "  %-10s %9s %9s %8s %10s %7s %12s\n", "geometry", "IoU mean", "IoU min", "XOR %", "PSNR dB",
                 "SSIM", "PSNR box dB");
@@ -119,7 +122,9 @@ std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, c
        << "</code></p>\n";
   html << "<h2>Summary</h2>\n<pre>" << Escape(SummaryTable(summary)) << "</pre>\n";
   html << "<p>PSNR and SSIM are computed inside the union of the true and the rendered silhouette; IoU and the XOR "
-          "error (% of the true silhouette area) over the whole image. \"PSNR box\" is the PSNR in the bounding box of "
+          "error (% of the true silhouette area) over the whole image. The rendered views are seen over "
+       << (summary.background == "clean plate" ? "each held-out camera's clean plate" : "black")
+       << ", so pixels only the real silhouette covers compare the actor with that background. \"PSNR box\" is the PSNR in the bounding box of "
           "that union with the pixels outside the union black in both images (the Neural Body / ZJU-MoCap "
           "convention). The error split separates texture from silhouette: the PSNR inside the intersection of the "
           "two silhouettes, and the share of the squared error in the union that falls on pixels only one of them "

@@ -34,6 +34,7 @@ struct EvaluationSummary {
   std::vector<std::string> heldout;
   int frames = 0;
   bool has_scan = false;
+  std::string background = "black";  // what the rendered views were seen over: "clean plate" or "black"
   GeometryScores scan;
   GeometryScores templ;
   double vertex_error_mean_m = 0.0;  // NaN without ground-truth meshes

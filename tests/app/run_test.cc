@@ -107,6 +107,20 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
                            "plots/error_heatmap_holdout0.png", "evaluation/holdout1/000000.png"})
     EXPECT_TRUE(fs::exists(fs::path(run) / file)) << file;
   EXPECT_NE(evaluate.stdout_text.find("held-out evaluation"), std::string::npos);
+
+  // The views are scored over the held-out cameras' clean plates (the synthetic capture has them);
+  // over black, only the pixels outside the rendered silhouette change: the union's PSNR moves,
+  // the PSNR inside both silhouettes does not.
+  EXPECT_EQ(metrics["background"], "clean plate");
+  const testing::CommandResult over_black =
+      RunConfluent({"evaluate", Capture(), "--run", run, "--heldout", "holdout0", "--heldout", "holdout1", "--masks",
+                    Truth() + "/masks", "--background", "black", "--side-by-side-every", "0"});
+  ASSERT_EQ(over_black.exit_code, 0) << over_black.stdout_text << over_black.stderr_text;
+  const nlohmann::json black = nlohmann::json::parse(std::ifstream(run + "/metrics.json"));
+  EXPECT_EQ(black["background"], "black");
+  EXPECT_NEAR(black["scan"]["psnr_inside_db_mean"].get<double>(), metrics["scan"]["psnr_inside_db_mean"].get<double>(), 1e-9);
+  EXPECT_GT(std::abs(black["scan"]["psnr_db_mean"].get<double>() - metrics["scan"]["psnr_db_mean"].get<double>()), 0.01);
+  EXPECT_EQ(black["scan"]["iou_mean"], metrics["scan"]["iou_mean"]);
 }
 
 TEST_F(RunCommandTest, KilledRunResumesWithoutRecomputingFinishedFrames) {
