@@ -15,6 +15,7 @@
 #include "app/run_folder.h"
 #include "app/run_report.h"
 #include "calib/capture.h"
+#include "calib/plate_colour.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -182,6 +183,27 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
       plates[h] = ToRgb8(ReadImage(path));
     }
   }
+  // The colour response of each held-out camera, matched from the clean plates: per used camera,
+  // the RGB gain from its plate to the held-out camera's plate on the floor both see.
+  const bool match_colour = over_plates && !args.has("no-colour-match");
+  std::vector<std::vector<Eigen::Vector3d>> view_gains(heldout.size());
+  if (match_colour) {
+    std::vector<Image> used_plates(used.size());
+    for (std::size_t i = 0; i < used.size(); ++i) {
+      const std::string path = capture.BackgroundPath(used[i]);
+      if (!path.empty()) used_plates[i] = ToRgb8(ReadImage(path));
+    }
+    for (std::size_t h = 0; h < heldout.size(); ++h)
+      for (std::size_t i = 0; i < used.size(); ++i) {
+        std::optional<Eigen::Vector3d> gain;
+        if (!used_plates[i].empty())
+          gain = PlateColourGain(used_cameras[i], used_plates[i], rig.cameras[heldout[h]], plates[h]);
+        if (!gain)
+          warnings.push_back("no colour match from " + used_cameras[i].name + " to " + rig.cameras[heldout[h]].name +
+                             " (no clean plate, or no floor both see)");
+        view_gains[h].push_back(gain.value_or(Eigen::Vector3d::Ones()));
+      }
+  }
   auto seen_over_background = [&](RenderResult rendered, std::size_t h) {
     if (over_plates) rendered.color = CompositeOverBackground(rendered, plates[h], capture.BackgroundPath(heldout[h]));
     return rendered;
@@ -247,11 +269,13 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
       row.camera = camera.name;
       row.frame = frame;
       row.vertex_error_m = vertex_error;
+      if (match_colour) template_texturer->SetViewGains(view_gains[h]);
       const RenderResult rendered_template = seen_over_background(template_texturer->Render(camera, true), h);
       Image region;  // of the best geometry: the scan when there is one
       row.templ = Score(rendered_template, real, truth, &region);
       std::optional<RenderResult> rendered_scan;
       if (scan) {
+        if (match_colour) scan_texturer->SetViewGains(view_gains[h]);
         rendered_scan = seen_over_background(scan_texturer->Render(camera, true), h);
         row.scan = Score(*rendered_scan, real, truth, &region);
       }
@@ -314,6 +338,7 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   summary.frames = static_cast<int>(frames.size());
   summary.has_scan = has_scan;
   summary.background = over_plates ? "clean plate" : "black";
+  summary.colour_matched = match_colour;
   summary.scan = {Mean(scan_iou), Min(scan_iou),   Mean(scan_xor),    Mean(scan_psnr),
                   Mean(scan_ssim), Mean(scan_box), Mean(scan_inside), Mean(scan_share)};
   summary.templ = {Mean(template_iou),  Min(template_iou),  Mean(template_xor),    Mean(template_psnr),
@@ -401,7 +426,9 @@ CommandSpec MakeEvaluateCommand() {
       "counted); also, as psnr_box, the PSNR in the bounding box of that union with the pixels outside it\n"
       "black in both images (the Neural Body / ZJU-MoCap convention). The rendered views are seen over the\n"
       "held-out camera's clean plate (CAPTURE/background/<cam>.png) when the capture has one, as the camera\n"
-      "saw the studio; --background black draws them over black. The error split: psnr_inside, the PSNR\n"
+      "saw the studio; --background black draws them over black. With the plates, the input cameras' colours\n"
+      "are matched to each held-out camera's response: per camera RGB gains measured on the floor (z = 0) both\n"
+      "plates show (--no-colour-match: off). The error split: psnr_inside, the PSNR\n"
       "inside the intersection of the two silhouettes (texture alone), and xor_error_share, the share of the\n"
       "squared error in the union on pixels only one silhouette covers (silhouette mismatch).\n"
       "True silhouettes come from --masks DIR, else from the run's extracted masks (RUN/masks).\n"
@@ -415,6 +442,7 @@ CommandSpec MakeEvaluateCommand() {
       {"masks", "DIR", "true silhouettes DIR/<cam>/<frame>.png (default: the run's masks)"},
       {"gt-meshes", "DIR", "ground-truth meshes DIR/<frame>.ply with the scan's topology: vertex error"},
       {"background", "plate|black", "what the rendered views are seen over (default plate: the held-out camera's clean plate)"},
+      {"no-colour-match", "", "do not match the input cameras' colours to the held-out camera's (from the plates)"},
       {"frames", "A:B", "frame range, B exclusive (default: all)"},
       {"every", "N", "score every N-th frame (default 1)"},
       {"side-by-side-every", "N", "write side-by-side pictures every N scored frames (default 10; 0 = none)"},

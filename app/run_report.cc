@@ -58,6 +58,7 @@ nlohmann::json EvaluationSummary::ToJson() const {
   json["masking"] = "PSNR and SSIM over the union of the true and the rendered silhouette; IoU and XOR over the whole image; "
                     "psnr_box: PSNR in the bounding box of the union, pixels outside the union black in both images";
   json["background"] = background;
+  json["colour_matched"] = colour_matched;
   if (has_scan) json["scan"] = ScoresJson(scan);
   json["template"] = ScoresJson(templ);
   json["scan_vertex_error_mean_m"] = JsonNumber(vertex_error_mean_m);
@@ -73,6 +74,7 @@ EvaluationSummary EvaluationSummary::Read(const std::string& path) {
     summary.frames = json.at("frames").get<int>();
     summary.has_scan = json.contains("scan");
     summary.background = json.value("background", std::string("black"));
+    summary.colour_matched = json.value("colour_matched", false);
     if (summary.has_scan) summary.scan = ScoresFromJson(json.at("scan"));
     summary.templ = ScoresFromJson(json.at("template"));
     summary.vertex_error_mean_m = FromJson(json.at("scan_vertex_error_mean_m"));
@@ -88,7 +90,8 @@ std::string SummaryTable(const EvaluationSummary& summary) {
   std::string cameras;
   for (const std::string& name : summary.heldout) cameras += (cameras.empty() ? "" : ", ") + name;
   out << "held-out evaluation (" << cameras << "; " << summary.frames << " frames; views over "
-      << (summary.background == "clean plate" ? "the clean plates" : summary.background) << ")\n";
+      << (summary.background == "clean plate" ? "the clean plates" : summary.background)
+      << (summary.colour_matched ? ", colours matched" : "") << ")\n";
   char line[160];
   std::snprintf(line, sizeof line, "  %-10s %9s %9s %8s %10s %7s %12s\n", "geometry", "IoU mean", "IoU min", "XOR %", "PSNR dB",
                 "SSIM", "PSNR box dB");
@@ -124,7 +127,11 @@ std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, c
   html << "<p>PSNR and SSIM are computed inside the union of the true and the rendered silhouette; IoU and the XOR "
           "error (% of the true silhouette area) over the whole image. The rendered views are seen over "
        << (summary.background == "clean plate" ? "each held-out camera's clean plate" : "black")
-       << ", so pixels only the real silhouette covers compare the actor with that background. \"PSNR box\" is the PSNR in the bounding box of "
+       << ", so pixels only the real silhouette covers compare the actor with that background"
+       << (summary.colour_matched ? "; the input cameras' colours are matched to the held-out camera's by RGB gains "
+                                    "measured on the floor both clean plates show"
+                                  : "")
+       << ". \"PSNR box\" is the PSNR in the bounding box of "
           "that union with the pixels outside the union black in both images (the Neural Body / ZJU-MoCap "
           "convention). The error split separates texture from silhouette: the PSNR inside the intersection of the "
           "two silhouettes, and the share of the squared error in the union that falls on pixels only one of them "

@@ -35,6 +35,7 @@ struct EvaluationSummary {
   int frames = 0;
   bool has_scan = false;
   std::string background = "black";  // what the rendered views were seen over: "clean plate" or "black"
+  bool colour_matched = false;        // input colours matched to each held-out camera's (plates)
   GeometryScores scan;
   GeometryScores templ;
   double vertex_error_mean_m = 0.0;  // NaN without ground-truth meshes

@@ -723,7 +723,8 @@ struct ProjectiveTexturer::Impl {
 
   bool frame_set = false;
   std::vector<Camera> cameras;
-  std::vector<Eigen::Vector3d> gains;
+  std::vector<Eigen::Vector3d> gains;       // colour balance of the frame (ones without)
+  std::vector<Eigen::Vector3d> view_gains;  // SetViewGains: per camera, on top of `gains`
   TextureFrameInfo info;
 
   // Cached undistortion map of the last distorted view.
@@ -1137,6 +1138,7 @@ struct ProjectiveTexturer::Impl {
     gains = options.colour_balance ? FitGains(vertices, frames) : std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Ones());
     info.colour_gains = gains;
     cameras = input_cameras;
+    if (view_gains.size() != cameras.size()) view_gains.clear();
     SetBlendCameras();
     frame_set = true;
   }
@@ -1521,7 +1523,7 @@ struct ProjectiveTexturer::Impl {
       b.rotation = camera.rotation.cast<float>();
       b.translation = camera.translation.cast<float>();
       b.center = camera.center_in_world().cast<float>();
-      b.gain = gains[i].cast<float>();
+      b.gain = (view_gains.empty() ? gains[i] : gains[i].cwiseProduct(view_gains[i])).cast<float>();
       b.fx = static_cast<float>(camera.K(0, 0));
       b.fy = static_cast<float>(camera.K(1, 1));
       b.cx = static_cast<float>(camera.K(0, 2));
@@ -1562,6 +1564,19 @@ void ProjectiveTexturer::SetFrame(const RowMatrixX3d& vertices, const std::vecto
 
 RenderResult ProjectiveTexturer::Render(const Camera& view, bool want_silhouette) {
   return impl_->Render(view, want_silhouette);
+}
+
+void ProjectiveTexturer::SetViewGains(const std::vector<Eigen::Vector3d>& gains) {
+  Impl& s = *impl_;
+  if (!s.frame_set) throw UsageError("ProjectiveTexturer::SetViewGains: SetFrame was not called");
+  if (!gains.empty() && gains.size() != s.cameras.size())
+    throw UsageError("ProjectiveTexturer::SetViewGains: " + std::to_string(gains.size()) + " gains for " +
+                     std::to_string(s.cameras.size()) + " cameras");
+  for (std::size_t i = 0; i < gains.size(); ++i)
+    if (!gains[i].allFinite() || gains[i].minCoeff() <= 0.0)
+      throw InputError("colour gains", "camera " + s.cameras[i].name + ": gains must be finite and positive");
+  s.view_gains = gains;
+  s.SetBlendCameras();
 }
 
 const TextureFrameInfo& ProjectiveTexturer::frame_info() const { return impl_->info; }

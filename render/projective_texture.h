@@ -125,6 +125,13 @@ class ProjectiveTexturer {
   // fails Camera::Check, UsageError when SetFrame was not called.
   RenderResult Render(const Camera& view, bool want_silhouette = false);
 
+  // RGB factors per input camera (SetFrame's order), applied on top of the colour balance in the
+  // following Render calls: for example gains to a real camera's colour response
+  // (calib/plate_colour.h) when rendering its view. Kept across SetFrame calls with as many
+  // cameras; an empty vector removes them. Throws UsageError before SetFrame or for a wrong count,
+  // InputError for a gain that is not finite and positive.
+  void SetViewGains(const std::vector<Eigen::Vector3d>& gains);
+
   // Per-camera statistics of the last SetFrame.
   const TextureFrameInfo& frame_info() const;
 

@@ -110,6 +110,34 @@ TEST(ProjectiveTexturer, HeldOutViewReproducesTheColours) {
   EXPECT_GT(self, 38.0);
 }
 
+// A real camera's colour response (SetViewGains): every input colour scaled per channel, so the
+// view scales with it; an empty list restores the plain view.
+TEST(ProjectiveTexturer, ViewGainsScaleTheBlendedColours) {
+  SphereCapture sphere;
+  ProjectiveTexturer texturer(sphere.real);
+  texturer.SetFrame(sphere.real.vertices, sphere.ring, sphere.images, sphere.masks);
+  const Camera view = RingCamera("heldout", 22.5, 1.6);
+  const RenderResult plain = texturer.Render(view, true);
+  const Eigen::Vector3d gain(1.1, 1.0, 0.8);
+  texturer.SetViewGains(std::vector<Eigen::Vector3d>(sphere.ring.size(), gain));
+  const RenderResult scaled = texturer.Render(view, true);
+  int checked = 0;
+  for (std::size_t p = 0; p < plain.silhouette.data.size(); ++p) {
+    if (!plain.silhouette.data[p]) continue;
+    for (int c = 0; c < 3; ++c) {
+      const double expected = std::min(255.0, plain.color.data[3 * p + c] * gain[c]);
+      EXPECT_NEAR(scaled.color.data[3 * p + c], expected, 1.5 + 0.01 * expected) << p;
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 1000);
+  texturer.SetViewGains({});
+  EXPECT_EQ(texturer.Render(view, true).color.data, plain.color.data);
+  EXPECT_THROW(texturer.SetViewGains({gain}), UsageError);
+  EXPECT_THROW(texturer.SetViewGains(std::vector<Eigen::Vector3d>(sphere.ring.size(), Eigen::Vector3d(1, NAN, 1))),
+               InputError);
+}
+
 TEST(ProjectiveTexturer, BlindAndExcludedCamerasContributeNothing) {
   const Mesh real = ColouredSphere();
   GroundTruth truth(real);

@@ -1,0 +1,30 @@
+#pragma once
+// Colour response between two cameras of a rig, measured on their clean plates: both see the
+// same floor (world z = 0, DESIGN.md), so where they see the same floor point their plate colours
+// differ by the cameras' gains (white balance, exposure). Used to render a view with the colour
+// response of a real camera (held-out evaluation).
+
+#include <Eigen/Core>
+#include <optional>
+
+#include "calib/camera.h"
+#include "core/image.h"
+
+namespace confluent {
+
+struct PlateColourOptions {
+  double floor_extent_m = 3.0;   // floor points sampled on a grid over [-extent, extent]^2
+  double floor_step_m = 0.02;    // grid spacing
+  int min_level = 30;            // both plates' 3x3 means above this (8-bit) for a sample to count
+  int min_samples = 200;         // fewer shared samples: no estimate
+};
+
+// Per-channel RGB gain g such that to_plate ~ g * from_plate on the floor seen by both cameras
+// (the median ratio of 3x3 means over shared floor points; lens distortion is followed through
+// Camera::Project). Plates are RGB8 images of each camera's size. nullopt when the cameras share
+// fewer than min_samples floor points. Throws InputError("plate") when a plate's size or format
+// does not match its camera.
+std::optional<Eigen::Vector3d> PlateColourGain(const Camera& from, const Image& from_plate, const Camera& to,
+                                               const Image& to_plate, const PlateColourOptions& options = {});
+
+}  // namespace confluent
