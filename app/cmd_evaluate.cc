@@ -187,22 +187,12 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   // the RGB gain from its plate to the held-out camera's plate on the floor both see.
   const bool match_colour = over_plates && !args.has("no-colour-match");
   std::vector<std::vector<Eigen::Vector3d>> view_gains(heldout.size());
-  if (match_colour) {
-    std::vector<Image> used_plates(used.size());
-    for (std::size_t i = 0; i < used.size(); ++i) {
-      const std::string path = capture.BackgroundPath(used[i]);
-      if (!path.empty()) used_plates[i] = ToRgb8(ReadImage(path));
-    }
-    for (std::size_t h = 0; h < heldout.size(); ++h)
-      for (std::size_t i = 0; i < used.size(); ++i) {
-        std::optional<Eigen::Vector3d> gain;
-        if (!used_plates[i].empty())
-          gain = PlateColourGain(used_cameras[i], used_plates[i], rig.cameras[heldout[h]], plates[h]);
-        if (!gain)
-          warnings.push_back("no colour match from " + used_cameras[i].name + " to " + rig.cameras[heldout[h]].name +
-                             " (no clean plate, or no floor both see)");
-        view_gains[h].push_back(gain.value_or(Eigen::Vector3d::Ones()));
-      }
+  for (std::size_t h = 0; h < heldout.size() && match_colour; ++h) {
+    std::vector<std::string> unmatched;
+    view_gains[h] = PlateColourGainsTo(capture, used, heldout[h], &unmatched);
+    for (const std::string& name : unmatched)
+      warnings.push_back("no colour match from " + name + " to " + rig.cameras[heldout[h]].name +
+                         " (no clean plate, or no floor both see)");
   }
   auto seen_over_background = [&](RenderResult rendered, std::size_t h) {
     if (over_plates) rendered.color = CompositeOverBackground(rendered, plates[h], capture.BackgroundPath(heldout[h]));

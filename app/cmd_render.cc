@@ -16,6 +16,7 @@
 #include "app/run_folder.h"
 #include "calib/capture.h"
 #include "calib/easymocap_io.h"
+#include "calib/plate_colour.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -183,6 +184,24 @@ int RunRender(const ParsedArgs& args, const Context& context) {
                      path_text + "'");
   }
 
+  // --over-plate: a capture camera's view over its clean plate, the input colours matched to it.
+  Image plate;
+  std::string plate_path;
+  std::vector<Eigen::Vector3d> plate_gains;
+  if (args.has("over-plate")) {
+    if (path_text.rfind("fixed:", 0) != 0 || path_text.find('/') != std::string::npos || width > 0)
+      throw UsageError("--over-plate: needs --path fixed:NAME with a camera of the capture, at its own size (no --width/--height)");
+    const int camera = rig.IndexOf(view);
+    plate_path = capture.BackgroundPath(camera);
+    if (plate_path.empty()) throw InputError(capture.root() + "/background", "no clean plate for camera " + view);
+    plate = ToRgb8(ReadImage(plate_path));
+    std::vector<std::string> unmatched;
+    plate_gains = PlateColourGainsTo(capture, used, camera, &unmatched);
+    for (const std::string& name : unmatched)
+      std::fprintf(stderr, "confluent render: warning: no colour match from %s to %s (no clean plate, or no floor both see)\n",
+                   name.c_str(), view.c_str());
+  }
+
   // Masks: the run's, else the capture's.
   auto mask_for = [&](int camera, int frame) -> Image {
     const std::string run_mask = run.MaskPath(rig.cameras[camera].name, frame);
@@ -221,11 +240,13 @@ int RunRender(const ParsedArgs& args, const Context& context) {
       if (!any_mask) masks.clear();
       const double start = NowSeconds();
       texturer.SetFrame(mesh.vertices, used_cameras, images, masks);
+      if (!plate_gains.empty()) texturer.SetViewGains(plate_gains);
       set_ms.push_back(1e3 * (NowSeconds() - start));
       current_frame = entry.frame;
     }
     const double start = NowSeconds();
-    const RenderResult result = texturer.Render(entry.camera);
+    RenderResult result = texturer.Render(entry.camera, !plate.empty());
+    if (!plate.empty()) result.color = CompositeOverBackground(result, plate, plate_path);
     render_ms.push_back(1e3 * (NowSeconds() - start));
     const int number = frozen ? static_cast<int>(j) : entry.frame;
     const std::string path = (fs::path(view_dir) / (FrameStem(number) + "." + format)).string();
@@ -272,6 +293,8 @@ CommandSpec MakeRenderCommand() {
       "Paths: orbit (one turn around the actor over the frames), cameras:NAME,... (a smooth path through\n"
       "those input cameras), fixed:NAME or fixed:CALIB_DIR/NAME (a camera of the capture or of another\n"
       "intri.yml/extri.yml, e.g. a held-out camera), bullet:FRAME (frozen time, a sweep around the ring).\n"
+      "--over-plate draws a capture camera's fixed view over its clean plate with the input cameras'\n"
+      "colours matched to it (as `confluent evaluate` scores held-out views).\n"
       "Frames without geometry are skipped and listed.";
   spec.min_positionals = 1;
   spec.max_positionals = 1;
@@ -291,6 +314,7 @@ CommandSpec MakeRenderCommand() {
       {"best-k", "K", "cameras blended per pixel (default 3)"},
       {"feather", "PX", "feathering width near silhouette edges, pixels (default 8)"},
       {"colour-balance", "", "fit per-camera colour gains on overlaps"},
+      {"over-plate", "", "with --path fixed:NAME: draw over that camera's clean plate, input colours matched to it"},
   };
   spec.run = RunRender;
   return spec;

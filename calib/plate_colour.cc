@@ -6,14 +6,15 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/image_io.h"
 
 namespace confluent {
 namespace {
 
-void CheckPlate(const Camera& camera, const Image& plate) {
+void CheckPlate(const Camera& camera, const Image& plate, const std::string& source = "plate") {
   if (plate.width != camera.width || plate.height != camera.height || plate.channels != 3 ||
       plate.type != PixelType::kUInt8)
-    throw InputError("plate", "clean plate of camera " + camera.name + " must be an RGB 8-bit image of " +
+    throw InputError(source, "clean plate of camera " + camera.name + " must be an RGB 8-bit image of " +
                                   std::to_string(camera.width) + "x" + std::to_string(camera.height) + ", got " +
                                   std::to_string(plate.width) + "x" + std::to_string(plate.height) + "x" +
                                   std::to_string(plate.channels));
@@ -58,6 +59,30 @@ std::optional<Eigen::Vector3d> PlateColourGain(const Camera& from, const Image& 
     gain[c] = r[r.size() / 2];
   }
   return gain;
+}
+
+std::vector<Eigen::Vector3d> PlateColourGainsTo(const Capture& capture, const std::vector<int>& from, int to,
+                                                std::vector<std::string>* unmatched,
+                                                const PlateColourOptions& options) {
+  const Rig& rig = capture.rig();
+  const std::string to_path = capture.BackgroundPath(to);
+  if (to_path.empty())
+    throw InputError(capture.root() + "/background", "no clean plate for camera " + rig.cameras[to].name);
+  const Image to_plate = ToRgb8(ReadImage(to_path));
+  CheckPlate(rig.cameras[to], to_plate, to_path);
+  std::vector<Eigen::Vector3d> gains;
+  for (int camera : from) {
+    const std::string path = capture.BackgroundPath(camera);
+    std::optional<Eigen::Vector3d> gain;
+    if (!path.empty()) {
+      const Image plate = ToRgb8(ReadImage(path));
+      CheckPlate(rig.cameras[camera], plate, path);
+      gain = PlateColourGain(rig.cameras[camera], plate, rig.cameras[to], to_plate, options);
+    }
+    if (!gain && unmatched) unmatched->push_back(rig.cameras[camera].name);
+    gains.push_back(gain.value_or(Eigen::Vector3d::Ones()));
+  }
+  return gains;
 }
 
 }  // namespace confluent

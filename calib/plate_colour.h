@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "calib/camera.h"
+#include "calib/capture.h"
 #include "core/image.h"
 
 namespace confluent {
@@ -26,5 +27,13 @@ struct PlateColourOptions {
 // does not match its camera.
 std::optional<Eigen::Vector3d> PlateColourGain(const Camera& from, const Image& from_plate, const Camera& to,
                                                const Image& to_plate, const PlateColourOptions& options = {});
+
+// The gains from each camera in `from` to camera `to` of `capture`, measured on their clean plates
+// (CAPTURE/background/<cam>.png|jpg): 1 for a camera without a plate or without floor shared with
+// `to`, whose name is then added to `unmatched` (when given). Throws InputError when `to` has no
+// clean plate, or a plate cannot be read or does not fit its camera.
+std::vector<Eigen::Vector3d> PlateColourGainsTo(const Capture& capture, const std::vector<int>& from, int to,
+                                                std::vector<std::string>* unmatched = nullptr,
+                                                const PlateColourOptions& options = {});
 
 }  // namespace confluent

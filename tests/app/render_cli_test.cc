@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <string>
 
+#include "calib/easymocap_io.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"
 #include "core/mesh_ops.h"
@@ -95,6 +96,50 @@ TEST(RenderCommand, FixedCameraReproducesItsImageAndBulletTimeFreezesAFrame) {
                                   "cameras:cam00,cam01", "--frames", "0:2", "--format", "exr"});
   ASSERT_EQ(result.exit_code, 0) << result.stderr_text;
   EXPECT_EQ(CountFiles(f.dir / "path/path", ".exr"), 2);
+}
+
+// --over-plate: the fixed view of a capture camera over its clean plate, the input colours
+// matched to it. Plain-colour plates make the floor ratio (and so the gains) known exactly.
+TEST(RenderCommand, OverPlateComposesOverTheCleanPlateAndMatchesColours) {
+  RenderFixture f;
+  const Camera camera = ReadEasyMocap(f.capture + "/intri.yml", f.capture + "/extri.yml").Get("cam01");
+  auto write_plate = [&](const std::string& name, int r, int g, int b) {
+    Image plate(camera.width, camera.height, 3);
+    for (std::size_t p = 0; p < plate.data.size(); p += 3) plate.data[p] = r, plate.data[p + 1] = g, plate.data[p + 2] = b;
+    fs::create_directories(f.capture + "/background");
+    WriteImage(f.capture + "/background/" + name + ".png", plate);
+  };
+  for (int c = 0; c < 8; ++c) write_plate("cam0" + std::to_string(c), 100, 120, 140);
+  write_plate("cam01", 110, 120, 126);  // gains 1.1, 1.0, 0.9 from every other camera
+  const std::vector<std::string> common = {"render", f.capture, "--run", f.run, "--path", "fixed:cam01",
+                                           "--exclude-camera", "cam01", "--frames", "0:1"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = common;
+    args.insert(args.end(), extra.begin(), extra.end());
+    const testing::CommandResult result = testing::RunConfluent(args);
+    EXPECT_EQ(result.exit_code, 0) << result.stderr_text;
+    return result;
+  };
+  with({"--out", f.dir / "plain"});
+  with({"--out", f.dir / "plate", "--over-plate"});
+  const Image plain = ReadImage(f.dir / "plain/cam01/000000.png");
+  const Image over = ReadImage(f.dir / "plate/cam01/000000.png");
+  // The corner is background: black plainly, the plate's colour over the plate.
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(plain.at<std::uint8_t>(0, 0, c), 0);
+  EXPECT_EQ(over.at<std::uint8_t>(0, 0, 0), 110);
+  EXPECT_EQ(over.at<std::uint8_t>(0, 0, 1), 120);
+  EXPECT_EQ(over.at<std::uint8_t>(0, 0, 2), 126);
+  // The sphere's colours carry the gains.
+  const int cx = plain.width / 2, cy = plain.height / 2;
+  const double gains[3] = {1.1, 1.0, 0.9};
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(over.at<std::uint8_t>(cx, cy, c), std::min(255.0, gains[c] * plain.at<std::uint8_t>(cx, cy, c)), 2.0)
+        << "channel " << c;
+
+  const testing::CommandResult orbit =
+      testing::RunConfluent({"render", f.capture, "--run", f.run, "--out", f.dir / "o", "--over-plate"});
+  EXPECT_EQ(orbit.exit_code, 2);
+  EXPECT_NE(orbit.stderr_text.find("--over-plate"), std::string::npos) << orbit.stderr_text;
 }
 
 TEST(RenderCommand, BadInputFails) {
