@@ -21,6 +21,7 @@
 #include "core/image_io.h"
 #include "core/image_metrics.h"
 #include "core/mesh_io.h"
+#include "render/composite.h"
 #include "render/projective_texture.h"
 
 namespace confluent::app {
@@ -194,8 +195,11 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
       warnings.push_back("no colour match from " + name + " to " + rig.cameras[heldout[h]].name +
                          " (no clean plate, or no floor both see)");
   }
+  const double edge_softness = args.get_double("edge-softness", 0.5);
+  if (!(edge_softness >= 0.0 && edge_softness <= 5.0)) throw UsageError("--edge-softness: must be within [0, 5] pixels");
   auto seen_over_background = [&](RenderResult rendered, std::size_t h) {
-    if (over_plates) rendered.color = CompositeOverBackground(rendered, plates[h], capture.BackgroundPath(heldout[h]));
+    if (over_plates)
+      rendered.color = CompositeOverBackground(rendered, plates[h], capture.BackgroundPath(heldout[h]), edge_softness);
     return rendered;
   };
 
@@ -329,6 +333,7 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   summary.has_scan = has_scan;
   summary.background = over_plates ? "clean plate" : "black";
   summary.colour_matched = match_colour;
+  summary.edge_softness_px = over_plates ? edge_softness : 0.0;
   summary.scan = {Mean(scan_iou), Min(scan_iou),   Mean(scan_xor),    Mean(scan_psnr),
                   Mean(scan_ssim), Mean(scan_box), Mean(scan_inside), Mean(scan_share)};
   summary.templ = {Mean(template_iou),  Min(template_iou),  Mean(template_xor),    Mean(template_psnr),
@@ -418,7 +423,8 @@ CommandSpec MakeEvaluateCommand() {
       "held-out camera's clean plate (CAPTURE/background/<cam>.png) when the capture has one, as the camera\n"
       "saw the studio; --background black draws them over black. With the plates, the input cameras' colours\n"
       "are matched to each held-out camera's response: per camera RGB gains measured on the floor (z = 0) both\n"
-      "plates show (--no-colour-match: off). The error split: psnr_inside, the PSNR\n"
+      "plates show (--no-colour-match: off), and the outline is matted over the plate with a Gaussian of\n"
+      "--edge-softness PX (default 0.5; 0 = a binary outline). The error split: psnr_inside, the PSNR\n"
       "inside the intersection of the two silhouettes (texture alone), and xor_error_share, the share of the\n"
       "squared error in the union on pixels only one silhouette covers (silhouette mismatch).\n"
       "True silhouettes come from --masks DIR, else from the run's extracted masks (RUN/masks).\n"
@@ -432,6 +438,7 @@ CommandSpec MakeEvaluateCommand() {
       {"masks", "DIR", "true silhouettes DIR/<cam>/<frame>.png (default: the run's masks)"},
       {"gt-meshes", "DIR", "ground-truth meshes DIR/<frame>.ply with the scan's topology: vertex error"},
       {"background", "plate|black", "what the rendered views are seen over (default plate: the held-out camera's clean plate)"},
+      {"edge-softness", "PX", "Gaussian sigma of the outline's matting over the plate (default 0.5; 0 = binary)"},
       {"no-colour-match", "", "do not match the input cameras' colours to the held-out camera's (from the plates)"},
       {"frames", "A:B", "frame range, B exclusive (default: all)"},
       {"every", "N", "score every N-th frame (default 1)"},

@@ -23,6 +23,7 @@
 #include "core/mesh_io.h"
 #include "core/video_writer.h"
 #include "render/camera_path.h"
+#include "render/composite.h"
 #include "render/projective_texture.h"
 
 namespace confluent::app {
@@ -188,6 +189,8 @@ int RunRender(const ParsedArgs& args, const Context& context) {
   Image plate;
   std::string plate_path;
   std::vector<Eigen::Vector3d> plate_gains;
+  const double edge_softness = args.get_double("edge-softness", 0.5);
+  if (!(edge_softness >= 0.0 && edge_softness <= 5.0)) throw UsageError("--edge-softness: must be within [0, 5] pixels");
   if (args.has("over-plate")) {
     if (path_text.rfind("fixed:", 0) != 0 || path_text.find('/') != std::string::npos || width > 0)
       throw UsageError("--over-plate: needs --path fixed:NAME with a camera of the capture, at its own size (no --width/--height)");
@@ -246,7 +249,7 @@ int RunRender(const ParsedArgs& args, const Context& context) {
     }
     const double start = NowSeconds();
     RenderResult result = texturer.Render(entry.camera, !plate.empty());
-    if (!plate.empty()) result.color = CompositeOverBackground(result, plate, plate_path);
+    if (!plate.empty()) result.color = CompositeOverBackground(result, plate, plate_path, edge_softness);
     render_ms.push_back(1e3 * (NowSeconds() - start));
     const int number = frozen ? static_cast<int>(j) : entry.frame;
     const std::string path = (fs::path(view_dir) / (FrameStem(number) + "." + format)).string();
@@ -315,6 +318,7 @@ CommandSpec MakeRenderCommand() {
       {"feather", "PX", "feathering width near silhouette edges, pixels (default 8)"},
       {"colour-balance", "", "fit per-camera colour gains on overlaps"},
       {"over-plate", "", "with --path fixed:NAME: draw over that camera's clean plate, input colours matched to it"},
+      {"edge-softness", "PX", "with --over-plate: Gaussian sigma of the outline's matting (default 0.5; 0 = binary)"},
   };
   spec.run = RunRender;
   return spec;

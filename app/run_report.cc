@@ -59,6 +59,7 @@ nlohmann::json EvaluationSummary::ToJson() const {
                     "psnr_box: PSNR in the bounding box of the union, pixels outside the union black in both images";
   json["background"] = background;
   json["colour_matched"] = colour_matched;
+  json["edge_softness_px"] = edge_softness_px;
   if (has_scan) json["scan"] = ScoresJson(scan);
   json["template"] = ScoresJson(templ);
   json["scan_vertex_error_mean_m"] = JsonNumber(vertex_error_mean_m);
@@ -75,6 +76,7 @@ EvaluationSummary EvaluationSummary::Read(const std::string& path) {
     summary.has_scan = json.contains("scan");
     summary.background = json.value("background", std::string("black"));
     summary.colour_matched = json.value("colour_matched", false);
+    summary.edge_softness_px = json.value("edge_softness_px", 0.0);
     if (summary.has_scan) summary.scan = ScoresFromJson(json.at("scan"));
     summary.templ = ScoresFromJson(json.at("template"));
     summary.vertex_error_mean_m = FromJson(json.at("scan_vertex_error_mean_m"));
@@ -91,7 +93,8 @@ std::string SummaryTable(const EvaluationSummary& summary) {
   for (const std::string& name : summary.heldout) cameras += (cameras.empty() ? "" : ", ") + name;
   out << "held-out evaluation (" << cameras << "; " << summary.frames << " frames; views over "
       << (summary.background == "clean plate" ? "the clean plates" : summary.background)
-      << (summary.colour_matched ? ", colours matched" : "") << ")\n";
+      << (summary.colour_matched ? ", colours matched" : "")
+      << (summary.edge_softness_px > 0 ? ", outline matted" : "") << ")\n";
   char line[160];
   std::snprintf(line, sizeof line, "  %-10s %9s %9s %8s %10s %7s %12s\n", "geometry", "IoU mean", "IoU min", "XOR %", "PSNR dB",
                 "SSIM", "PSNR box dB");

@@ -792,22 +792,4 @@ RenderResult MeshRenderer::Render(const Camera& camera, const RenderRequest& req
 
 const EglContextInfo& MeshRenderer::context_info() const { return impl_->context.info(); }
 
-Image CompositeOverBackground(const RenderResult& rendered, const Image& background,
-                              const std::string& background_name) {
-  const Image& color = rendered.color;
-  if (rendered.silhouette.width != color.width || rendered.silhouette.height != color.height)
-    throw InputError(background_name, "the render has no silhouette to composite with");
-  if (background.width != color.width || background.height != color.height)
-    throw InputError(background_name, "background is " + std::to_string(background.width) + "x" +
-                                          std::to_string(background.height) + ", the view " +
-                                          std::to_string(color.width) + "x" + std::to_string(color.height));
-  if (background.channels != 3 || background.type != PixelType::kUInt8 || color.channels != 3 ||
-      color.type != PixelType::kUInt8)
-    throw InputError(background_name, "background and render must both be RGB 8-bit");
-  Image out = background;
-  for (std::size_t p = 0; p < rendered.silhouette.data.size(); ++p)
-    if (rendered.silhouette.data[p] != 0) std::copy_n(color.data.begin() + 3 * p, 3, out.data.begin() + 3 * p);
-  return out;
-}
-
 }  // namespace confluent

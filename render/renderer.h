@@ -102,13 +102,6 @@ struct RenderResult {
   IdImage triangle_id;  // face index (+ the mesh's id offset); -1 where background
 };
 
-// The rendered RGB8 colour where the silhouette is set, `background` (an RGB8 image of the same
-// size, such as a camera's clean plate) elsewhere: a novel view seen over the real background.
-// `rendered` needs its silhouette. Throws InputError(background_name) when the sizes or pixel
-// formats differ.
-Image CompositeOverBackground(const RenderResult& rendered, const Image& background,
-                              const std::string& background_name);
-
 // Renders meshes into calibrated cameras. Owns the EGL context, the framebuffers, the shader
 // programs and the uploaded meshes, so that uploading once and then rendering many cameras and
 // frames (updating only vertex positions) is fast. Not thread-safe; use from one thread.

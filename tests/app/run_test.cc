@@ -109,22 +109,25 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
   EXPECT_NE(evaluate.stdout_text.find("held-out evaluation"), std::string::npos);
 
   // The views are scored over the held-out cameras' clean plates (the synthetic capture has them),
-  // with the input colours matched to each held-out camera's response. Without the match only
-  // the colours inside change; over black, only the pixels outside the rendered silhouette:
+  // with the input colours matched to each held-out camera's response and the outline matted.
+  // Without the match the colours inside change; over black with a binary outline, only the
+  // pixels outside the rendered silhouette:
   // the union's PSNR moves, the PSNR inside both silhouettes does not.
   EXPECT_EQ(metrics["background"], "clean plate");
   EXPECT_EQ(metrics["colour_matched"], true);
-  auto evaluate_with = [&](const std::string& option) {
-    const testing::CommandResult result =
-        RunConfluent({"evaluate", Capture(), "--run", run, "--heldout", "holdout0", "--heldout", "holdout1", "--masks",
-                      Truth() + "/masks", option, "--side-by-side-every", "0"});
+  auto evaluate_with = [&](const std::vector<std::string>& options) {
+    std::vector<std::string> args = {"evaluate", Capture(), "--run", run, "--heldout", "holdout0", "--heldout", "holdout1",
+                                     "--masks", Truth() + "/masks", "--side-by-side-every", "0"};
+    args.insert(args.end(), options.begin(), options.end());
+    const testing::CommandResult result = RunConfluent(args);
     EXPECT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
     return nlohmann::json::parse(std::ifstream(run + "/metrics.json"));
   };
-  const nlohmann::json unmatched = evaluate_with("--no-colour-match");
+  EXPECT_EQ(metrics["edge_softness_px"], 0.5);
+  const nlohmann::json unmatched = evaluate_with({"--no-colour-match", "--edge-softness", "0"});
   EXPECT_EQ(unmatched["colour_matched"], false);
   EXPECT_GT(std::abs(unmatched["scan"]["psnr_inside_db_mean"].get<double>() - metrics["scan"]["psnr_inside_db_mean"].get<double>()), 1e-6);
-  const nlohmann::json black = evaluate_with("--background=black");
+  const nlohmann::json black = evaluate_with({"--background=black"});
   EXPECT_EQ(black["background"], "black");
   EXPECT_EQ(black["colour_matched"], false);
   EXPECT_NEAR(black["scan"]["psnr_inside_db_mean"].get<double>(), unmatched["scan"]["psnr_inside_db_mean"].get<double>(), 1e-9);

@@ -546,38 +546,6 @@ TEST(MeshRenderer, StrongBarrelDistortionFillsTheCorners) {
   for (std::uint8_t value : result.silhouette.data) ASSERT_EQ(value, 255);
 }
 
-TEST(CompositeOverBackground, RenderedPixelsOverThePlateElsewhere) {
-  RenderResult rendered;
-  rendered.color = Image(3, 2, 3);
-  rendered.silhouette = Image(3, 2, 1);
-  Image plate(3, 2, 3);
-  for (std::size_t i = 0; i < rendered.color.data.size(); ++i) {
-    rendered.color.data[i] = static_cast<std::uint8_t>(200 + i);
-    plate.data[i] = static_cast<std::uint8_t>(10 + i);
-  }
-  rendered.silhouette.data = {255, 0, 0, 0, 255, 0};
-  const Image out = CompositeOverBackground(rendered, plate, "plate.png");
-  for (std::size_t p = 0; p < 6; ++p)
-    for (int c = 0; c < 3; ++c)
-      EXPECT_EQ(out.data[3 * p + c], (rendered.silhouette.data[p] ? rendered.color : plate).data[3 * p + c]) << p;
-}
-
-TEST(CompositeOverBackground, MismatchedPlateIsAnInputErrorNamingIt) {
-  RenderResult rendered;
-  rendered.color = Image(4, 4, 3);
-  rendered.silhouette = Image(4, 4, 1);
-  try {
-    CompositeOverBackground(rendered, Image(5, 4, 3), "background/cam03.png");
-    FAIL() << "no error";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("background/cam03.png"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("5x4"), std::string::npos) << e.what();
-  }
-  RenderResult no_silhouette;
-  no_silhouette.color = Image(4, 4, 3);
-  EXPECT_THROW(CompositeOverBackground(no_silhouette, Image(4, 4, 3), "p.png"), InputError);
-}
-
 TEST(MeshRendererBadInput, InvertedOrDegenerateCameraIsAnInputError) {
   MeshRenderer renderer;
   renderer.AddMesh(MakeIcosphere(Eigen::Vector3d::Zero(), 0.5, 1));
