@@ -55,8 +55,9 @@ std::optional<Eigen::Vector3d> PlateColourGain(const Camera& from, const Image& 
   Eigen::Vector3d gain;
   for (int c = 0; c < 3; ++c) {
     std::vector<double>& r = ratios[c];
-    std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
+    std::sort(r.begin(), r.end());
     gain[c] = r[r.size() / 2];
+    if (r[3 * r.size() / 4] - r[r.size() / 4] > options.max_ratio_spread * gain[c]) return std::nullopt;
   }
   return gain;
 }

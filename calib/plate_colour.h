@@ -18,12 +18,16 @@ struct PlateColourOptions {
   double floor_step_m = 0.02;    // grid spacing
   int min_level = 30;            // both plates' 3x3 means above this (8-bit) for a sample to count
   int min_samples = 200;         // fewer shared samples: no estimate
+  // The ratios must agree: an interquartile range above this fraction of the median (in any
+  // channel) means the two cameras do not see the same floor at z = 0 (a floor elsewhere, or
+  // props): no estimate.
+  double max_ratio_spread = 0.1;
 };
 
 // Per-channel RGB gain g such that to_plate ~ g * from_plate on the floor seen by both cameras
 // (the median ratio of 3x3 means over shared floor points; lens distortion is followed through
 // Camera::Project). Plates are RGB8 images of each camera's size. nullopt when the cameras share
-// fewer than min_samples floor points. Throws InputError("plate") when a plate's size or format
+// fewer than min_samples floor points or the ratios disagree (max_ratio_spread). Throws InputError("plate") when a plate's size or format
 // does not match its camera.
 std::optional<Eigen::Vector3d> PlateColourGain(const Camera& from, const Image& from_plate, const Camera& to,
                                                const Image& to_plate, const PlateColourOptions& options = {});
