@@ -190,7 +190,7 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   std::vector<std::vector<Eigen::Vector3d>> view_gains(heldout.size());
   for (std::size_t h = 0; h < heldout.size() && match_colour; ++h) {
     std::vector<std::string> unmatched;
-    view_gains[h] = PlateColourGainsTo(capture, used, heldout[h], &unmatched);
+    view_gains[h] = PlateColourGainsTo(capture, used, heldout[h], plates[h], &unmatched);
     for (const std::string& name : unmatched)
       warnings.push_back("no colour match from " + name + " to " + rig.cameras[heldout[h]].name +
                          " (no clean plate, or no floor both see)");

@@ -199,7 +199,7 @@ int RunRender(const ParsedArgs& args, const Context& context) {
     if (plate_path.empty()) throw InputError(capture.root() + "/background", "no clean plate for camera " + view);
     plate = ToRgb8(ReadImage(plate_path));
     std::vector<std::string> unmatched;
-    plate_gains = PlateColourGainsTo(capture, used, camera, &unmatched);
+    plate_gains = PlateColourGainsTo(capture, used, camera, plate, &unmatched);
     for (const std::string& name : unmatched)
       std::fprintf(stderr, "confluent render: warning: no colour match from %s to %s (no clean plate, or no floor both see)\n",
                    name.c_str(), view.c_str());

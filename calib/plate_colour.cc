@@ -63,14 +63,11 @@ std::optional<Eigen::Vector3d> PlateColourGain(const Camera& from, const Image& 
 }
 
 std::vector<Eigen::Vector3d> PlateColourGainsTo(const Capture& capture, const std::vector<int>& from, int to,
-                                                std::vector<std::string>* unmatched,
+                                                const Image& to_plate, std::vector<std::string>* unmatched,
                                                 const PlateColourOptions& options) {
   const Rig& rig = capture.rig();
   const std::string to_path = capture.BackgroundPath(to);
-  if (to_path.empty())
-    throw InputError(capture.root() + "/background", "no clean plate for camera " + rig.cameras[to].name);
-  const Image to_plate = ToRgb8(ReadImage(to_path));
-  CheckPlate(rig.cameras[to], to_plate, to_path);
+  CheckPlate(rig.cameras[to], to_plate, to_path.empty() ? capture.root() + "/background" : to_path);
   std::vector<Eigen::Vector3d> gains;
   for (int camera : from) {
     const std::string path = capture.BackgroundPath(camera);

@@ -33,11 +33,12 @@ std::optional<Eigen::Vector3d> PlateColourGain(const Camera& from, const Image& 
                                                const Image& to_plate, const PlateColourOptions& options = {});
 
 // The gains from each camera in `from` to camera `to` of `capture`, measured on their clean plates
-// (CAPTURE/background/<cam>.png|jpg): 1 for a camera without a plate or without floor shared with
-// `to`, whose name is then added to `unmatched` (when given). Throws InputError when `to` has no
-// clean plate, or a plate cannot be read or does not fit its camera.
+// (CAPTURE/background/<cam>.png|jpg; `to_plate` is camera `to`'s, already read, as RGB8): 1 for a
+// camera without a plate or without floor shared with `to`, whose name is then added to
+// `unmatched` (when given). Throws InputError naming the file when a plate cannot be read or does
+// not fit its camera.
 std::vector<Eigen::Vector3d> PlateColourGainsTo(const Capture& capture, const std::vector<int>& from, int to,
-                                                std::vector<std::string>* unmatched = nullptr,
+                                                const Image& to_plate, std::vector<std::string>* unmatched = nullptr,
                                                 const PlateColourOptions& options = {});
 
 }  // namespace confluent

@@ -283,9 +283,13 @@ PixelBox CpuRasterizer::Draw(const CpuRasterFrame& frame, int row_begin, int row
 }
 
 PixelBox CpuRasterizer::DrawDepth(const Camera& camera, const RowMatrixX3f& vertices_in_world, CpuRasterFrame* frame,
-                                  std::vector<float>* camera_z) const {
+                                  std::vector<float>* camera_z, const PixelBox* previous) const {
   Project(camera, vertices_in_world, frame);
-  camera_z->assign(static_cast<std::size_t>(camera.width) * camera.height, 0.0f);
+  const std::size_t pixels = static_cast<std::size_t>(camera.width) * camera.height;
+  if (previous != nullptr && camera_z->size() == pixels)
+    FillBox(camera_z->data(), camera.width, *previous, 0.0f);
+  else
+    camera_z->assign(pixels, 0.0f);
   const PixelBox box = Draw(*frame, 0, camera.height, camera_z->data());
   for (int y = box.y0; y < box.y1; ++y) {
     float* row = camera_z->data() + static_cast<std::size_t>(y) * camera.width;

@@ -11,6 +11,7 @@
 // Triangles are clipped at the near plane and at a guard band around the image; surface beyond
 // the far plane is not drawn. Lens distortion is ignored (draw ideal pixels and remap, or use GL).
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -33,7 +34,23 @@ struct CpuRasterOptions {
 struct PixelBox {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   bool empty() const { return x1 <= x0 || y1 <= y0; }
+  // The smallest box holding both (an empty box adds nothing).
+  PixelBox Union(const PixelBox& other) const {
+    if (other.empty()) return *this;
+    if (empty()) return other;
+    return PixelBox{std::min(x0, other.x0), std::min(y0, other.y0), std::max(x1, other.x1), std::max(y1, other.y1)};
+  }
 };
+
+// Sets the pixels of `box` in a row-major buffer `width` pixels wide, `channels` values per pixel,
+// to `value` (clearing only what a previous frame wrote).
+template <typename T>
+void FillBox(T* data, int width, const PixelBox& box, T value, int channels = 1) {
+  for (int y = box.y0; y < box.y1; ++y) {
+    T* row = data + (static_cast<std::size_t>(y) * width) * channels;
+    std::fill(row + box.x0 * channels, row + box.x1 * channels, value);
+  }
+}
 
 // The mesh's vertices projected into one camera (CpuRasterizer::Project), the input of Draw.
 struct CpuRasterFrame {
@@ -71,11 +88,12 @@ class CpuRasterizer {
   PixelBox Draw(const CpuRasterFrame& frame, int row_begin, int row_end, float* inverse_depth,
                 std::int32_t* face_ids = nullptr) const;
 
-  // Convenience for depth maps: `camera_z` (width x height, resized) gets the camera z of the
-  // nearest surface per pixel, 0 where none; `frame` is scratch. Returns the box of covered
-  // pixels (possibly larger).
+  // Depth maps: `camera_z` (width x height) gets the camera z of the nearest surface per pixel, 0
+  // where none; `frame` is scratch. Returns the box of covered pixels (possibly larger). With
+  // `previous` (the box this call returned for the same buffer last time) only that box is
+  // cleared, when the buffer already has the camera's size; without, the whole buffer is.
   PixelBox DrawDepth(const Camera& camera, const RowMatrixX3f& vertices_in_world, CpuRasterFrame* frame,
-                     std::vector<float>* camera_z) const;
+                     std::vector<float>* camera_z, const PixelBox* previous = nullptr) const;
 
   int num_faces() const { return static_cast<int>(faces_.size()); }
 

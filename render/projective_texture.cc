@@ -182,6 +182,14 @@ void AdviseHugePages(void* data, std::size_t bytes) {
 #endif
 }
 
+// Empties `buffer` and reserves `count` elements in a fresh allocation advised for huge pages.
+template <typename T>
+void ReserveWithHugePages(std::size_t count, std::vector<T>* buffer) {
+  std::vector<T>().swap(*buffer);
+  buffer->reserve(count);
+  AdviseHugePages(buffer->data(), count * sizeof(T));
+}
+
 // Buffers of DepthFeatherMap, kept across frames (large fresh allocations fault in every page).
 struct FeatherScratch {
   std::vector<float> padded;
@@ -262,9 +270,7 @@ void BandDistance(const std::uint8_t* not_edge, int w, int h, int cap, std::int3
 int DepthFeatherMap(const float* z, int w, int h, const PixelBox& z_box, const Image& mask,
                     const ProjectiveTextureOptions& options, double feather_px, float* out, PixelBox* written,
                     FeatherScratch* scratch) {
-  for (int y = written->y0; y < written->y1; ++y)
-    std::fill(out + 2 * (static_cast<std::size_t>(y) * w + written->x0),
-              out + 2 * (static_cast<std::size_t>(y) * w + written->x1), 0.0f);
+  FillBox(out, w, *written, 0.0f, 2);
   *written = PixelBox();
   // Region of interest: covered pixels plus the feather margin.
   int min_x = w, min_y = h, max_x = -1, max_y = -1, count = 0;
@@ -1030,29 +1036,14 @@ struct ProjectiveTexturer::Impl {
       const std::size_t pixels = static_cast<std::size_t>(camera.width) * camera.height;
       PixelBox z_box{0, 0, camera.width, camera.height};
       if (source[i] == 0) {
-        // CPU: clear only what the last frame drew, draw 1 / z, convert inside the drawn box.
-        std::vector<float>& z = camera_z[i];
-        if (z.size() != pixels) {
-          z.assign(pixels, 0.0f);
-          z_written[i] = PixelBox();
-        }
-        for (int y = z_written[i].y0; y < z_written[i].y1; ++y)
-          std::fill(z.data() + static_cast<std::size_t>(y) * camera.width + z_written[i].x0,
-                    z.data() + static_cast<std::size_t>(y) * camera.width + z_written[i].x1, 0.0f);
-        depth_rasterizer->Project(camera, positions, raster_frame);
-        z_box = depth_rasterizer->Draw(*raster_frame, 0, camera.height, z.data());
-        for (int y = z_box.y0; y < z_box.y1; ++y) {
-          float* row = z.data() + static_cast<std::size_t>(y) * camera.width;
-          for (int x = z_box.x0; x < z_box.x1; ++x) row[x] = row[x] > 0.0f ? 1.0f / row[x] : 0.0f;
-        }
+        // CPU: clears only what the last frame drew.
+        z_box = depth_rasterizer->DrawDepth(camera, positions, raster_frame, &camera_z[i], &z_written[i]);
       } else if (source[i] == 1) {
         WindowDepthToCameraZ(renderer_options.near_m, renderer_options.far_m, &camera_z[i]);
       }
       z_written[i] = z_box;
       if (depth_feather[i].size() != 2 * pixels) {
-        std::vector<float>().swap(depth_feather[i]);
-        depth_feather[i].reserve(2 * pixels);
-        AdviseHugePages(depth_feather[i].data(), 2 * pixels * sizeof(float));
+        ReserveWithHugePages(2 * pixels, &depth_feather[i]);
         depth_feather[i].assign(2 * pixels, 0.0f);
         feather_written[i] = PixelBox();
       }
@@ -1061,11 +1052,8 @@ struct ProjectiveTexturer::Impl {
       visible[i] = DepthFeatherMap(camera_z[i].data(), camera.width, camera.height, z_box, map_mask, options,
                                    feather_px, depth_feather[i].data(), &feather_written[i], scratch);
       // The blending reads the images on the CPU: keep them (the caller's may go away).
-      if (frame_images[i].data.capacity() < rgb[i]->data.size()) {
-        std::vector<std::uint8_t>().swap(frame_images[i].data);
-        frame_images[i].data.reserve(rgb[i]->data.size());
-        AdviseHugePages(frame_images[i].data.data(), rgb[i]->data.size());
-      }
+      if (frame_images[i].data.capacity() < rgb[i]->data.size())
+        ReserveWithHugePages(rgb[i]->data.size(), &frame_images[i].data);
       if (rgb[i] == &converted[i]) frame_images[i] = std::move(converted[i]);
       else frame_images[i] = *rgb[i];
     };
@@ -1320,12 +1308,8 @@ struct ProjectiveTexturer::Impl {
       view_face_ids.assign(pixels, -1);
       view_written = PixelBox();
     }
-    for (int y = view_written.y0; y < view_written.y1; ++y) {
-      const std::size_t row = static_cast<std::size_t>(y) * width;
-      std::fill(view_inverse_depth.begin() + row + view_written.x0, view_inverse_depth.begin() + row + view_written.x1,
-                0.0f);
-      std::fill(view_face_ids.begin() + row + view_written.x0, view_face_ids.begin() + row + view_written.x1, -1);
-    }
+    FillBox(view_inverse_depth.data(), width, view_written, 0.0f);
+    FillBox(view_face_ids.data(), width, view_written, std::int32_t{-1});
     view_written = PixelBox();
     if (rect.x1 <= rect.x0 || rect.y1 <= rect.y0) return;
     if (raster_frames.empty()) raster_frames.resize(1);
@@ -1346,17 +1330,7 @@ struct ProjectiveTexturer::Impl {
       throw;
     }
     other.get();
-    for (const PixelBox& box : boxes) {
-      if (box.empty()) continue;
-      if (view_written.empty()) {
-        view_written = box;
-      } else {
-        view_written.x0 = std::min(view_written.x0, box.x0);
-        view_written.y0 = std::min(view_written.y0, box.y0);
-        view_written.x1 = std::max(view_written.x1, box.x1);
-        view_written.y1 = std::max(view_written.y1, box.y1);
-      }
-    }
+    view_written = boxes[0].Union(boxes[1]);
     if (view_written.empty()) return;
     // Ray of pixel (u, v) in the world: D0 + u Du + v Dv (camera z = 1); X = C + z ray.
     const Eigen::Matrix3d world_from_pixel = ideal.rotation.transpose() * ideal.K.inverse();

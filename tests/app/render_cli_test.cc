@@ -140,6 +140,13 @@ TEST(RenderCommand, OverPlateComposesOverTheCleanPlateAndMatchesColours) {
       testing::RunConfluent({"render", f.capture, "--run", f.run, "--out", f.dir / "o", "--over-plate"});
   EXPECT_EQ(orbit.exit_code, 2);
   EXPECT_NE(orbit.stderr_text.find("--over-plate"), std::string::npos) << orbit.stderr_text;
+
+  // A plate of the wrong size: a clear error naming the file.
+  WriteImage(f.capture + "/background/cam01.png", Image(camera.width / 2, camera.height, 3));
+  const testing::CommandResult wrong = testing::RunConfluent(
+      {"render", f.capture, "--run", f.run, "--out", f.dir / "w", "--path", "fixed:cam01", "--over-plate"});
+  EXPECT_EQ(wrong.exit_code, 1);
+  EXPECT_NE(wrong.stderr_text.find("background/cam01.png"), std::string::npos) << wrong.stderr_text;
 }
 
 TEST(RenderCommand, BadInputFails) {

@@ -124,6 +124,25 @@ TEST(CpuRasterizer, SphereDepthMatchesTheAnalyticSurface) {
   EXPECT_GT(hits, 2000);
 }
 
+// A second frame drawn into the same buffer, clearing only the box the first one returned, equals
+// a fresh draw: nothing of the first frame is left behind.
+TEST(CpuRasterizer, RedrawClearsWhatThePreviousFrameDrew) {
+  const Mesh sphere = MakeIcosphere(Eigen::Vector3d(0, 0, 0), 0.5, 3);
+  const Camera camera = LookAtCamera(Eigen::Vector3d(0.5, -2.5, 0.9), Eigen::Vector3d::Zero(), 160, 120, 150.0);
+  CpuRasterizer rasterizer(sphere.faces, sphere.num_vertices());
+  CpuRasterFrame frame;
+  std::vector<float> reused, fresh;
+  const PixelBox first = rasterizer.DrawDepth(camera, sphere.vertices.cast<float>(), &frame, &reused);
+  RowMatrixX3f moved = sphere.vertices.cast<float>();
+  moved.col(0).array() += 0.4f;
+  moved *= 0.5f;
+  const PixelBox second = rasterizer.DrawDepth(camera, moved, &frame, &reused, &first);
+  rasterizer.DrawDepth(camera, moved, &frame, &fresh);
+  ASSERT_FALSE(first.empty());
+  EXPECT_LT(second.x1 - second.x0, first.x1 - first.x0);  // the first frame covered more
+  EXPECT_EQ(reused, fresh);
+}
+
 TEST(CpuRasterizer, AgreesWithMeshRendererDepthAndTriangleIds) {
   Mesh mesh = MakeUvSphere(0.6, 40, 80);
   for (int v = 0; v < mesh.num_vertices(); ++v) {
