@@ -142,6 +142,7 @@ int RunRun(const ParsedArgs& args, const Context& context) {
     throw InputError(inputs.correspondences_path, "correspondences file not found");
   inputs.refine_silhouettes = !args.has("no-refine");
   inputs.refine_iterations = args.get_int("refine-iterations", inputs.refine_iterations);
+  inputs.refine_photo = inputs.refine_silhouettes && !args.has("no-photo-refine");
   if (inputs.refine_iterations < 1 || inputs.refine_iterations > 50)
     throw UsageError("--refine-iterations: must be within [1, 50]");
   inputs.threads = args.get_int("threads", 2);
@@ -188,8 +189,9 @@ CommandSpec MakeRunCommand() {
   spec.description =
       "Stages, in order: silhouettes (RUN/masks), marker-less tracking (RUN/tracking, RUN/template, poses.json,\n"
       "motion.bvh), registration of the template to the scan and correspondences (RUN/correspondences.json,\n"
-      "automatic unless given), Confluent Motion refined against the used cameras' silhouettes\n"
-      "(RUN/scan/<frame>.ply; --no-refine keeps the plain deformation) and the 3D video: an orbit around the\n"
+      "automatic unless given), Confluent Motion refined against the used cameras' silhouettes and then\n"
+      "until neighbouring cameras agree on the texture (RUN/scan/<frame>.ply; --no-refine keeps the plain\n"
+      "deformation, --no-photo-refine only the silhouette refinement) and the 3D video: an orbit around the\n"
       "actor, projectively textured from the used cameras (RUN/renders/orbit/<frame>.png, orbit.mp4).\n"
       "Without a scan (none given and none in the capture), the 3D video uses the tracked template.\n"
       "Resumable: every file is written atomically and a re-run skips finished frames. --frames A:B makes\n"
@@ -207,6 +209,7 @@ CommandSpec MakeRunCommand() {
       {"masks", "DIR", "use these masks DIR/<cam>/<frame>.png instead of extracting silhouettes"},
       {"no-refine", "", "keep the deformed scan as Confluent Motion gives it (no silhouette refinement)"},
       {"refine-iterations", "N", "rounds of silhouette refinement per frame (default 18)"},
+      {"no-photo-refine", "", "skip the photo-consistency refinement that follows the silhouette refinement"},
       {"no-render", "", "skip the 3D-video render stage"},
       {"render-width", "PX", "width of the orbit video (default 960)"},
       {"render-height", "PX", "height of the orbit video (default 720)"},

@@ -28,6 +28,7 @@ struct RunInputs {
   int threads = 2;
   bool refine_silhouettes = true;    // pull the animated scan onto the used cameras' masks
   int refine_iterations = 18;        // rounds of the silhouette refinement per frame
+  bool refine_photo = true;          // then make neighbouring used cameras agree on the texture
 };
 
 // How much a stage did.

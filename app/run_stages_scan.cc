@@ -16,6 +16,7 @@
 #include "deform/correspondences.h"
 #include "render/camera_path.h"
 #include "render/projective_texture.h"
+#include "tracking/photo_refinement.h"
 #include "tracking/scan_registration.h"
 #include "tracking/silhouette_refinement.h"
 
@@ -92,6 +93,10 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   fs::create_directories(folder.Path("scan"));
   // Silhouette refinement against the cameras the run uses.
   std::unique_ptr<SilhouetteRefiner> refiner;
+  // Photo-consistency refinement, then a few silhouette rounds to put the outline back where the
+  // moves along the normals shifted it.
+  std::unique_ptr<PhotoRefiner> photo_refiner;
+  std::unique_ptr<SilhouetteRefiner> outline_refiner;
   std::vector<Camera> used_cameras;
   std::vector<int> used_indices;
   if (inputs.refine_silhouettes) {
@@ -100,6 +105,14 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     refine_options.threads = inputs.threads;
     refine_options.iterations = inputs.refine_iterations;
     refiner = std::make_unique<SilhouetteRefiner>(scan, refine_options);
+    if (inputs.refine_photo) {
+      PhotoRefinementOptions photo_options;
+      photo_options.threads = inputs.threads;
+      photo_refiner = std::make_unique<PhotoRefiner>(scan, photo_options);
+      SilhouetteRefinementOptions outline_options = refine_options;
+      outline_options.iterations = std::min(6, inputs.refine_iterations);
+      outline_refiner = std::make_unique<SilhouetteRefiner>(scan, outline_options);
+    }
     timings->Add("refine_factor", -1, NowSeconds() - refine_start);
     const Rig& rig = inputs.capture->rig();
     for (int c = 0; c < rig.size(); ++c)
@@ -107,6 +120,8 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   }
   double iou_before = 0.0, iou_after = 0.0;
   int iou_views = 0;
+  double flow_before = 0.0, flow_after = 0.0;
+  int flow_frames = 0;
 
   auto template_vertices = [&](int frame) {
     const std::string path = folder.TemplatePath(frame);
@@ -129,9 +144,10 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     Mesh animated = scan;
     animated.vertices = motion.Deform(template_vertices(frame), &summary);
     timings->Add("deform", frame, NowSeconds() - frame_start);
+    std::vector<Image> masks;
+    std::vector<double> iou_after_frame;  // per used camera, after the last refinement
     if (refiner) {
       const double refine_start = NowSeconds();
-      std::vector<Image> masks;
       for (int c : used_indices) {
         const std::string path = RunMaskPath(inputs, c, frame);
         if (!fs::exists(path)) throw InputError(path, "silhouette missing (the silhouette stage did not finish this frame)");
@@ -140,9 +156,24 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
       SilhouetteRefinementSummary refined;
       animated.vertices = refiner->Refine(animated.vertices, used_cameras, masks, &refined);
       for (std::size_t i = 0; i < used_cameras.size(); ++i)
-        if (!std::isnan(refined.iou_before[i])) iou_before += refined.iou_before[i], iou_after += refined.iou_after[i], ++iou_views;
+        if (!std::isnan(refined.iou_before[i])) iou_before += refined.iou_before[i], ++iou_views;
+      iou_after_frame = refined.iou_after;
       timings->Add("refine", frame, NowSeconds() - refine_start);
     }
+    if (photo_refiner) {
+      const double photo_start = NowSeconds();
+      std::vector<Image> images;
+      for (int c : used_indices) images.push_back(inputs.capture->ReadFrame(c, frame));
+      PhotoRefinementSummary photo;
+      animated.vertices = photo_refiner->Refine(animated.vertices, used_cameras, images, &photo);
+      if (photo.rounds > 0) flow_before += photo.first_flow_px, flow_after += photo.last_flow_px, ++flow_frames;
+      SilhouetteRefinementSummary outline;
+      animated.vertices = outline_refiner->Refine(animated.vertices, used_cameras, masks, &outline);
+      iou_after_frame = outline.iou_after;
+      timings->Add("photo_refine", frame, NowSeconds() - photo_start);
+    }
+    for (double iou : iou_after_frame)
+      if (!std::isnan(iou)) iou_after += iou;
     WriteMesh(folder.ScanPath(frame), animated);
     if (summary.singular) singular_frames.push_back(frame);
     previous = frame;
@@ -153,6 +184,13 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     char line[160];
     std::snprintf(line, sizeof(line), "silhouette refinement: scan IoU in the used cameras %.4f -> %.4f (mean over %d views)",
                   iou_before / iou_views, iou_after / iou_views, iou_views);
+    report.notes.push_back(line);
+  }
+  if (flow_frames > 0) {
+    char line[200];
+    std::snprintf(line, sizeof(line),
+                  "photo refinement: mean flow between neighbouring cameras through the scan %.3f px -> %.3f px (before "
+                  "the last round; mean over %d frames)", flow_before / flow_frames, flow_after / flow_frames, flow_frames);
     report.notes.push_back(line);
   }
   if (!singular_frames.empty())

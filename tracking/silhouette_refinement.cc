@@ -1,6 +1,5 @@
 #include "tracking/silhouette_refinement.h"
 
-#include <Eigen/SparseCore>
 #include <cmath>
 #include <cstdlib>
 #include <stdexcept>
@@ -10,8 +9,7 @@
 #include "core/error.h"
 #include "core/mesh_ops.h"
 #include "core/mesh_validation.h"
-#include "deform/cholmod_solver.h"
-#include "deform/laplacian.h"
+#include "deform/normalised_diffusion.h"
 #include "tracking/overlap.h"
 
 namespace confluent {
@@ -36,8 +34,7 @@ bool Inside(const Image& mask, const Eigen::Vector2d& pixel) {
 struct SilhouetteRefiner::Impl {
   SilhouetteRefinementOptions options;
   RowMatrixX3i faces;
-  double gamma = 0.0;     // absolute diffusion stiffness
-  SparseCholesky spread;  // L + gamma I
+  std::unique_ptr<NormalisedDiffusion> spread;  // of the rim steps over the surface
   bool closed = false;    // watertight: the fast facing-triangle raster gives the silhouette
 
   // Sums, per vertex, the 3D steps that bring it onto `mask`'s edge where it lies on the outline
@@ -89,14 +86,8 @@ SilhouetteRefiner::SilhouetteRefiner(const Mesh& scan, const SilhouetteRefinemen
   impl_->faces = scan.faces;
   impl_->closed = ValidateMesh(scan).is_watertight();
   if (scan.num_faces() == 0) throw InputError("scan", "silhouette refinement: the scan has no faces");
-  const Eigen::SparseMatrix<double> laplacian = CotanLaplacian(scan.vertices, scan.faces);
-  impl_->gamma = options.spread_stiffness * laplacian.diagonal().mean();
-  Eigen::SparseMatrix<double> identity(laplacian.rows(), laplacian.cols());
-  identity.setIdentity();
-  if (impl_->spread.Factor(laplacian + impl_->gamma * identity) != CholeskyStatus::kOk)
-    throw InputError("scan", "silhouette refinement: the diffusion system cannot be factored: " +
-                                 impl_->spread.message());
-  impl_->spread.set_threads(options.threads);
+  impl_->spread = std::make_unique<NormalisedDiffusion>(scan, options.spread_stiffness, "scan");
+  impl_->spread->set_threads(options.threads);
 }
 
 SilhouetteRefiner::~SilhouetteRefiner() = default;
@@ -107,7 +98,7 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
                                        const std::vector<Image>& masks, SilhouetteRefinementSummary* summary_out) const {
   const Impl& s = *impl_;
   const int n = static_cast<int>(vertices.rows());
-  if (n != s.spread.rows()) throw std::invalid_argument("Refine: the vertex count differs from the scan's");
+  if (n != s.spread->num_vertices()) throw std::invalid_argument("Refine: the vertex count differs from the scan's");
   if (cameras.size() != masks.size()) throw std::invalid_argument("Refine: one mask per camera is needed");
   std::vector<int> usable;
   for (std::size_t c = 0; c < cameras.size(); ++c) {
@@ -163,26 +154,23 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
       mesh.vertices = before_move + gain * move;
       continue;
     }
-    // Normalised diffusion of the mean rim steps: D = S(w step) / (S(w) + fade), S = gamma (L + gamma I)^-1.
-    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 4);
+    // Normalised diffusion of the mean rim steps.
+    Eigen::MatrixXd mean_steps = Eigen::MatrixXd::Zero(n, 3);
+    std::vector<bool> on_rim(n, false);
     summary.rim_vertices = 0;
     for (int v = 0; v < n; ++v) {
       int count = 0;
       Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
       for (int part = 0; part < threads; ++part) count += counts[part][v], sum += step_sums[part].row(v);
       if (count == 0) continue;
-      rhs.block<1, 3>(v, 0) = s.gamma * sum / count;
-      rhs(v, 3) = s.gamma;
+      mean_steps.row(v) = sum / count;
+      on_rim[v] = true;
       ++summary.rim_vertices;
     }
-    const Eigen::MatrixXd spread = s.spread.Solve(rhs);
+    move = s.spread->Spread(mean_steps, on_rim, s.options.fade_weight);
     before_move = mesh.vertices;
     iou_before_move = iou;
     mean_iou_before_move = mean_iou;
-    for (int v = 0; v < n; ++v) {
-      const Eigen::RowVector3d step = spread.block<1, 3>(v, 0) / (spread(v, 3) + s.options.fade_weight);
-      move.row(v) = step.allFinite() ? step : Eigen::RowVector3d::Zero();
-    }
     mesh.vertices += gain * move;
   }
   for (int c : usable) iou[c] = MaskIoU(silhouette(mesh, cameras[c]), masks[c]);

@@ -81,6 +81,14 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
   EXPECT_EQ(CountFiles(run + "/template", ".ply"), 10);
   EXPECT_EQ(CountFiles(run + "/scan", ".ply"), 10);
   EXPECT_EQ(CountFiles(run + "/renders/orbit", ".png"), 10);
+  // Every frame went through the silhouette and then the photo-consistency refinement.
+  EXPECT_NE((result.stdout_text + result.stderr_text).find("photo refinement: mean flow between neighbouring cameras"),
+            std::string::npos)
+      << result.stdout_text;
+  std::ifstream timings(run + "/timings.csv");
+  int photo_rows = 0;
+  for (std::string line; std::getline(timings, line);) photo_rows += line.rfind("photo_refine,", 0) == 0;
+  EXPECT_EQ(photo_rows, 10);
   const nlohmann::json record = nlohmann::json::parse(std::ifstream(run + "/run.json"));
   EXPECT_EQ(record["excluded_cameras"], (std::vector<std::string>{"holdout0", "holdout1"}));
   EXPECT_FALSE(record["input_checksums"]["scan"].get<std::string>().empty());

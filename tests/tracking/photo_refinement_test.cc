@@ -1,0 +1,115 @@
+// Photo-consistency refinement (tracking/photo_refinement.h): a textured sphere seen by a ring of
+// cameras, and a start whose surface bulges out by a few millimetres where the silhouettes cannot
+// tell (facing the cameras). The refinement must flatten the bulge from the images alone.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "calib/camera.h"
+#include "core/mesh_ops.h"
+#include "render/renderer.h"
+#include "tracking/photo_refinement.h"
+
+namespace confluent {
+namespace {
+
+constexpr double kRadius = 0.3;
+
+// A 480x360 camera on a ring of radius 2 m at height `height_m`, looking at the origin (about
+// 4.4 mm per pixel at the sphere).
+Camera RingCamera(int index, double azimuth_rad, double height_m) {
+  const Eigen::Vector3d centre(2.0 * std::cos(azimuth_rad), 2.0 * std::sin(azimuth_rad), height_m);
+  return LookAtCamera("ring" + std::to_string(index), centre, Eigen::Vector3d::Zero(), 480, 360, 450.0);
+}
+
+// A sphere painted with a pattern of blobs a few centimetres wide (vertex colours).
+Mesh TexturedSphere() {
+  Mesh sphere = MakeUvSphere(kRadius, 96, 192);
+  sphere.colors.resize(sphere.num_vertices(), 3);
+  for (int v = 0; v < sphere.num_vertices(); ++v) {
+    const Eigen::Vector3d p = sphere.vertices.row(v).transpose() / kRadius;
+    const double a = std::sin(23.0 * p.x() + 3.0 * p.y()) * std::sin(19.0 * p.y() - 5.0 * p.z()) * std::sin(21.0 * p.z() + 2.0 * p.x());
+    const double b = std::sin(37.0 * p.y() + 11.0 * p.z());
+    sphere.colors.row(v) << static_cast<float>(0.5 + 0.4 * a), static_cast<float>(0.5 + 0.3 * b),
+        static_cast<float>(0.5 - 0.4 * a);
+  }
+  return sphere;
+}
+
+double MeanRadiusError(const RowMatrixX3d& vertices) {
+  return (vertices.rowwise().norm().array() - kRadius).abs().mean();
+}
+
+struct TexturedRing {
+  Mesh truth = TexturedSphere();
+  std::vector<Camera> cameras;
+  std::vector<Image> images;
+  TexturedRing() {
+    MeshRenderer renderer;
+    renderer.AddMesh(truth);
+    RenderRequest request;
+    request.shading.lit = false;
+    request.cull_back_faces = true;
+    for (int k = 0; k < 8; ++k) {
+      cameras.push_back(RingCamera(k, 2.0 * M_PI * k / 8, k % 2 ? 0.3 : -0.2));
+      images.push_back(renderer.Render(cameras.back(), request).color);
+    }
+  }
+};
+
+// The truth with a smooth outward bulge of up to `height_m` along the normals, centred on +x.
+RowMatrixX3d Bulged(const Mesh& truth, double height_m) {
+  RowMatrixX3d vertices = truth.vertices;
+  for (int v = 0; v < truth.num_vertices(); ++v) {
+    const Eigen::Vector3d direction = truth.vertices.row(v).transpose().normalized();
+    const double c = direction.x();
+    if (c > 0.5) vertices.row(v) += (height_m * (c - 0.5) / 0.5) * direction.transpose();
+  }
+  return vertices;
+}
+
+TEST(PhotoRefinement, FlattensABulgeThatTheTextureReveals) {
+  const TexturedRing ring;
+  const RowMatrixX3d start = Bulged(ring.truth, 0.006);
+  const double before = MeanRadiusError(start);
+  ASSERT_GT(before, 0.0005);
+  PhotoRefiner refiner(ring.truth);
+  PhotoRefinementSummary summary;
+  const RowMatrixX3d refined = refiner.Refine(start, ring.cameras, ring.images, &summary);
+  ASSERT_TRUE(refined.allFinite());
+  EXPECT_EQ(summary.rounds, PhotoRefinementOptions().rounds);
+  EXPECT_GT(summary.samples, 10000);
+  EXPECT_GT(summary.measured_vertices, ring.truth.num_vertices() / 4);
+  // The neighbours disagree through the bulge and agree better after the moves.
+  EXPECT_GT(summary.first_flow_px, 0.2);
+  EXPECT_LT(summary.last_flow_px, 0.5 * summary.first_flow_px);
+  EXPECT_LT(MeanRadiusError(refined), 0.35 * before) << "before " << before;
+}
+
+TEST(PhotoRefinement, TheTrueSurfaceStaysPut) {
+  const TexturedRing ring;
+  PhotoRefiner refiner(ring.truth);
+  PhotoRefinementSummary summary;
+  const RowMatrixX3d refined = refiner.Refine(ring.truth.vertices, ring.cameras, ring.images, &summary);
+  EXPECT_LT(summary.first_flow_px, 0.15);
+  EXPECT_LT(MeanRadiusError(refined), 0.0002);
+}
+
+TEST(PhotoRefinement, WrongImagesAreRefusedAndOneCameraChangesNothing) {
+  const Mesh sphere = MakeUvSphere(kRadius, 16, 32);
+  PhotoRefiner refiner(sphere);
+  const std::vector<Camera> cameras = {RingCamera(0, 0.0, 0.0), RingCamera(1, 0.8, 0.0)};
+  EXPECT_THROW(refiner.Refine(sphere.vertices, cameras, {Image(480, 360, 3), Image(100, 100, 3)}), std::invalid_argument);
+  EXPECT_THROW(refiner.Refine(sphere.vertices, cameras, {Image(480, 360, 3)}), std::invalid_argument);
+  EXPECT_THROW(refiner.Refine(sphere.vertices.topRows(10), cameras, {Image(480, 360, 3), Image(480, 360, 3)}),
+               std::invalid_argument);
+  const RowMatrixX3d alone = refiner.Refine(sphere.vertices, {cameras[0]}, {Image(480, 360, 3)});
+  EXPECT_EQ(alone, sphere.vertices);
+  // Blank images give no flow to triangulate anywhere useful: nothing moves far.
+  const RowMatrixX3d blank = refiner.Refine(sphere.vertices, cameras, {Image(480, 360, 3), Image(480, 360, 3)});
+  EXPECT_LT((blank - sphere.vertices).cwiseAbs().maxCoeff(), 0.002);
+}
+
+}  // namespace
+}  // namespace confluent
