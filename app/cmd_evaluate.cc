@@ -13,6 +13,7 @@
 #include "app/frame_range.h"
 #include "app/plot.h"
 #include "app/run_folder.h"
+#include "app/texture_args.h"
 #include "app/run_report.h"
 #include "calib/capture.h"
 #include "calib/plate_colour.h"
@@ -195,6 +196,7 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
       warnings.push_back("no colour match from " + name + " to " + rig.cameras[heldout[h]].name +
                          " (no clean plate, or no floor both see)");
   }
+  const ProjectiveTextureOptions texture_options = TextureOptionsFromArgs(args);
   const double edge_softness = args.get_double("edge-softness", 0.5);
   if (!(edge_softness >= 0.0 && edge_softness <= 5.0)) throw UsageError("--edge-softness: must be within [0, 5] pixels");
   auto seen_over_background = [&](RenderResult rendered, std::size_t h) {
@@ -217,9 +219,9 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   std::optional<ProjectiveTexturer> scan_texturer, template_texturer;
   if (has_scan) {
     const Mesh first = ReadMesh(run.ScanPath(range.first));
-    scan_texturer.emplace(first);
+    scan_texturer.emplace(first, texture_options);
   }
-  template_texturer.emplace(ReadMesh(run.TemplatePath(frames.front())));
+  template_texturer.emplace(ReadMesh(run.TemplatePath(frames.front())), texture_options);
 
   fs::create_directories(run.Path("plots"));
   std::vector<Row> rows;
@@ -334,6 +336,7 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   summary.background = over_plates ? "clean plate" : "black";
   summary.colour_matched = match_colour;
   summary.edge_softness_px = over_plates ? edge_softness : 0.0;
+  summary.texturing = DescribeTextureOptions(texture_options);
   summary.scan = {Mean(scan_iou), Min(scan_iou),   Mean(scan_xor),    Mean(scan_psnr),
                   Mean(scan_ssim), Mean(scan_box), Mean(scan_inside), Mean(scan_share)};
   summary.templ = {Mean(template_iou),  Min(template_iou),  Mean(template_xor),    Mean(template_psnr),
@@ -427,6 +430,8 @@ CommandSpec MakeEvaluateCommand() {
       "--edge-softness PX (default 0.5; 0 = a binary outline). The error split: psnr_inside, the PSNR\n"
       "inside the intersection of the two silhouettes (texture alone), and xor_error_share, the share of the\n"
       "squared error in the union on pixels only one silhouette covers (silhouette mismatch).\n"
+      "Scan and template are textured alike; --best-k, --feather and --colour-balance set the texturing as\n"
+      "for `confluent render` (metrics.json records it as texturing).\n"
       "True silhouettes come from --masks DIR, else from the run's extracted masks (RUN/masks).\n"
       "With --gt-meshes DIR (meshes with the scan's topology, DIR/<frame>.ply) the scan's mean vertex error\n"
       "is reported. Writes RUN/metrics.json, metrics.csv, plots/*.png (per-frame metrics, error heat maps),\n"
@@ -444,6 +449,7 @@ CommandSpec MakeEvaluateCommand() {
       {"every", "N", "score every N-th frame (default 1)"},
       {"side-by-side-every", "N", "write side-by-side pictures every N scored frames (default 10; 0 = none)"},
   };
+  for (const OptionSpec& option : TextureOptionSpecs()) spec.options.push_back(option);
   spec.run = RunEvaluate;
   return spec;
 }

@@ -14,6 +14,7 @@
 #include "app/commands.h"
 #include "app/frame_range.h"
 #include "app/run_folder.h"
+#include "app/texture_args.h"
 #include "calib/capture.h"
 #include "calib/easymocap_io.h"
 #include "calib/plate_colour.h"
@@ -74,11 +75,7 @@ int RunRender(const ParsedArgs& args, const Context& context) {
   VideoWriterOptions video_options;
   video_options.fps = args.get_double("fps", 25.0);
   video_options.Check();
-  ProjectiveTextureOptions texture_options;
-  texture_options.best_k = args.get_int("best-k", texture_options.best_k);
-  texture_options.feather_px = args.get_double("feather", texture_options.feather_px);
-  texture_options.colour_balance = args.has("colour-balance");
-  texture_options.Check();
+  const ProjectiveTextureOptions texture_options = TextureOptionsFromArgs(args);
 
   CaptureOptions capture_options;
   capture_options.check_every_image_header = false;
@@ -314,12 +311,10 @@ CommandSpec MakeRenderCommand() {
       {"width", "W", "output width (with --height; default: the cameras' size)"},
       {"height", "H", "output height"},
       {"path-frames", "N", "cameras on the path (default: one per frame; bullet time: 60)"},
-      {"best-k", "K", "cameras blended per pixel (default 3)"},
-      {"feather", "PX", "feathering width near silhouette edges, pixels (default 8)"},
-      {"colour-balance", "", "fit per-camera colour gains on overlaps"},
       {"over-plate", "", "with --path fixed:NAME: draw over that camera's clean plate, input colours matched to it"},
       {"edge-softness", "PX", "with --over-plate: Gaussian sigma of the outline's matting (default 0.5; 0 = binary)"},
   };
+  for (const OptionSpec& option : TextureOptionSpecs()) spec.options.push_back(option);
   spec.run = RunRender;
   return spec;
 }

@@ -60,6 +60,7 @@ nlohmann::json EvaluationSummary::ToJson() const {
   json["background"] = background;
   json["colour_matched"] = colour_matched;
   json["edge_softness_px"] = edge_softness_px;
+  json["texturing"] = texturing;
   if (has_scan) json["scan"] = ScoresJson(scan);
   json["template"] = ScoresJson(templ);
   json["scan_vertex_error_mean_m"] = JsonNumber(vertex_error_mean_m);
@@ -77,6 +78,7 @@ EvaluationSummary EvaluationSummary::Read(const std::string& path) {
     summary.background = json.value("background", std::string("black"));
     summary.colour_matched = json.value("colour_matched", false);
     summary.edge_softness_px = json.value("edge_softness_px", 0.0);
+    summary.texturing = json.value("texturing", std::string());
     if (summary.has_scan) summary.scan = ScoresFromJson(json.at("scan"));
     summary.templ = ScoresFromJson(json.at("template"));
     summary.vertex_error_mean_m = FromJson(json.at("scan_vertex_error_mean_m"));

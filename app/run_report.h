@@ -37,6 +37,7 @@ struct EvaluationSummary {
   std::string background = "black";  // what the rendered views were seen over: "clean plate" or "black"
   bool colour_matched = false;        // input colours matched to each held-out camera's (plates)
   double edge_softness_px = 0.0;      // Gaussian sigma of the outline matting over the plates
+  std::string texturing;              // the projective-texturing options, in words
   GeometryScores scan;
   GeometryScores templ;
   double vertex_error_mean_m = 0.0;  // NaN without ground-truth meshes

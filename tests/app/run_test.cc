@@ -141,6 +141,12 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
   EXPECT_NEAR(black["scan"]["psnr_inside_db_mean"].get<double>(), unmatched["scan"]["psnr_inside_db_mean"].get<double>(), 1e-9);
   EXPECT_GT(std::abs(black["scan"]["psnr_db_mean"].get<double>() - unmatched["scan"]["psnr_db_mean"].get<double>()), 0.01);
   EXPECT_EQ(black["scan"]["iou_mean"], metrics["scan"]["iou_mean"]);
+  // The texturing options, as render's: one camera per pixel changes the colours, not the outline.
+  EXPECT_EQ(metrics["texturing"], "best 3 cameras, feather 8 px, no colour balance");
+  const nlohmann::json nearest = evaluate_with({"--best-k", "1"});
+  EXPECT_EQ(nearest["texturing"], "best 1 camera, feather 8 px, no colour balance");
+  EXPECT_GT(std::abs(nearest["scan"]["psnr_inside_db_mean"].get<double>() - metrics["scan"]["psnr_inside_db_mean"].get<double>()), 1e-6);
+  EXPECT_EQ(nearest["scan"]["iou_mean"], metrics["scan"]["iou_mean"]);
 }
 
 TEST_F(RunCommandTest, KilledRunResumesWithoutRecomputingFinishedFrames) {
