@@ -88,9 +88,10 @@ struct PhotoRefiner::Impl {
     const Camera& cb = *b.camera;
     const int width = ca.width, height = ca.height;
     const int margin = 16;
+    if (a.box.empty()) return;  // the scan is not in this camera's view
     const cv::Rect box(std::max(0, a.box.x0 - margin), std::max(0, a.box.y0 - margin), 0, 0);
     const int x1 = std::min(width, a.box.x1 + margin), y1 = std::min(height, a.box.y1 + margin);
-    if (x1 - box.x < 16 || y1 - box.y < 16) return;
+    if (x1 - box.x < 32 || y1 - box.y < 32) return;  // too small for the flow's pyramid
     const cv::Rect crop(box.x, box.y, x1 - box.x, y1 - box.y);
     // Pixels well inside the scan's outline in a.
     cv::Mat inner(crop.size(), CV_8U);

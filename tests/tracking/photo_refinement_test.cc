@@ -96,6 +96,21 @@ TEST(PhotoRefinement, TheTrueSurfaceStaysPut) {
   EXPECT_LT(MeanRadiusError(refined), 0.0002);
 }
 
+TEST(PhotoRefinement, ACameraThatSeesNothingContributesNothing) {
+  const TexturedRing ring;
+  const RowMatrixX3d start = Bulged(ring.truth, 0.006);
+  PhotoRefiner refiner(ring.truth);
+  const RowMatrixX3d without = refiner.Refine(start, ring.cameras, ring.images);
+  std::vector<Camera> cameras = ring.cameras;
+  std::vector<Image> images = ring.images;
+  // Above the sphere, looking up and away.
+  cameras.push_back(LookAtCamera("away", Eigen::Vector3d(0.0, 0.0, 2.0), Eigen::Vector3d(0.3, 0.0, 4.0), 480, 360, 450.0));
+  images.push_back(Image(480, 360, 3));
+  const RowMatrixX3d with = refiner.Refine(start, cameras, images);
+  ASSERT_TRUE(with.allFinite());
+  EXPECT_LT((with - without).cwiseAbs().maxCoeff(), 1e-9);
+}
+
 TEST(PhotoRefinement, WrongImagesAreRefusedAndOneCameraChangesNothing) {
   const Mesh sphere = MakeUvSphere(kRadius, 16, 32);
   PhotoRefiner refiner(sphere);
