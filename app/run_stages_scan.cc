@@ -182,8 +182,9 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   }
   if (iou_views > 0) {
     char line[160];
-    std::snprintf(line, sizeof(line), "silhouette refinement: scan IoU in the used cameras %.4f -> %.4f (mean over %d views)",
-                  iou_before / iou_views, iou_after / iou_views, iou_views);
+    std::snprintf(line, sizeof(line), "%s: scan IoU in the used cameras %.4f -> %.4f (mean over %d views)",
+                  photo_refiner ? "silhouette and photo refinement" : "silhouette refinement", iou_before / iou_views,
+                  iou_after / iou_views, iou_views);
     report.notes.push_back(line);
   }
   if (flow_frames > 0) {

@@ -87,12 +87,12 @@ struct PhotoRefiner::Impl {
     const Camera& ca = *a.camera;
     const Camera& cb = *b.camera;
     const int width = ca.width, height = ca.height;
-    const int margin = 16;
     if (a.box.empty()) return;  // the scan is not in this camera's view
-    const cv::Rect box(std::max(0, a.box.x0 - margin), std::max(0, a.box.y0 - margin), 0, 0);
+    const int margin = 16;
+    const int x0 = std::max(0, a.box.x0 - margin), y0 = std::max(0, a.box.y0 - margin);
     const int x1 = std::min(width, a.box.x1 + margin), y1 = std::min(height, a.box.y1 + margin);
-    if (x1 - box.x < 32 || y1 - box.y < 32) return;  // too small for the flow's pyramid
-    const cv::Rect crop(box.x, box.y, x1 - box.x, y1 - box.y);
+    if (x1 - x0 < 32 || y1 - y0 < 32) return;  // too small for the flow's pyramid
+    const cv::Rect crop(x0, y0, x1 - x0, y1 - y0);
     // Pixels well inside the scan's outline in a.
     cv::Mat inner(crop.size(), CV_8U);
     for (int y = 0; y < crop.height; ++y)
