@@ -132,6 +132,7 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   const int every = args.get_int("every", 1);
   if (every < 1) throw UsageError("--every: must be >= 1");
   const int side_by_side_every = args.get_int("side-by-side-every", 10);
+  const ProjectiveTextureOptions texture_options = TextureOptionsFromArgs(args);
 
   // Cameras: held out (scored) and the ones the run used (texturing).
   std::vector<std::string> run_excluded;
@@ -196,7 +197,6 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
       warnings.push_back("no colour match from " + name + " to " + rig.cameras[heldout[h]].name +
                          " (no clean plate, or no floor both see)");
   }
-  const ProjectiveTextureOptions texture_options = TextureOptionsFromArgs(args);
   const double edge_softness = args.get_double("edge-softness", 0.5);
   if (!(edge_softness >= 0.0 && edge_softness <= 5.0)) throw UsageError("--edge-softness: must be within [0, 5] pixels");
   auto seen_over_background = [&](RenderResult rendered, std::size_t h) {

@@ -96,7 +96,7 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   // Photo-consistency refinement, then a few silhouette rounds to put the outline back where the
   // moves along the normals shifted it.
   std::unique_ptr<PhotoRefiner> photo_refiner;
-  std::unique_ptr<SilhouetteRefiner> outline_refiner;
+  const int outline_rounds = std::min(6, inputs.refine_iterations);
   std::vector<Camera> used_cameras;
   std::vector<int> used_indices;
   if (inputs.refine_silhouettes) {
@@ -109,9 +109,6 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
       PhotoRefinementOptions photo_options;
       photo_options.threads = inputs.threads;
       photo_refiner = std::make_unique<PhotoRefiner>(scan, photo_options);
-      SilhouetteRefinementOptions outline_options = refine_options;
-      outline_options.iterations = std::min(6, inputs.refine_iterations);
-      outline_refiner = std::make_unique<SilhouetteRefiner>(scan, outline_options);
     }
     timings->Add("refine_factor", -1, NowSeconds() - refine_start);
     const Rig& rig = inputs.capture->rig();
@@ -168,7 +165,7 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
       animated.vertices = photo_refiner->Refine(animated.vertices, used_cameras, images, &photo);
       if (photo.rounds > 0) flow_before += photo.first_flow_px, flow_after += photo.last_flow_px, ++flow_frames;
       SilhouetteRefinementSummary outline;
-      animated.vertices = outline_refiner->Refine(animated.vertices, used_cameras, masks, &outline);
+      animated.vertices = refiner->Refine(animated.vertices, used_cameras, masks, &outline, outline_rounds);
       iou_after_frame = outline.iou_after;
       timings->Add("photo_refine", frame, NowSeconds() - photo_start);
     }

@@ -100,8 +100,14 @@ struct PhotoRefiner::Impl {
         inner.at<uchar>(y, x) = a.inverse_depth[static_cast<std::size_t>(y + crop.y) * width + x + crop.x] > 0 ? 255 : 0;
     if (options.outline_margin_px > 0)
       cv::erode(inner, inner, cv::Mat(), cv::Point(-1, -1), options.outline_margin_px);
+    // A pixel of a whose surface point b sees: where b's colour was read.
+    struct Sample {
+      int x, y, face;           // in the crop
+      Eigen::Vector3d point;    // the scan's surface point, world
+      float b_x, b_y;           // its pixel in b
+    };
+    std::vector<Sample> samples;
     cv::Mat warped = a.grey(crop).clone(), real = a.grey(crop).clone();
-    cv::Mat in_b(crop.size(), CV_32FC2, cv::Scalar(-1.0f, -1.0f));  // the pixel in b, or -1
     const double min_cos = options.min_view_cosine;
     for (int y = 0; y < crop.height; ++y)
       for (int x = 0; x < crop.width; ++x) {
@@ -123,7 +129,7 @@ struct PhotoRefiner::Impl {
         const float inverse_b = b.inverse_depth[nearest];
         if (!(inverse_b > 0.0f) || std::abs(1.0 / inverse_b - point_in_b.z()) > options.visibility_tolerance_m) continue;
         warped.at<uchar>(y, x) = cv::saturate_cast<uchar>(Bilinear(b.grey, pixel.x(), pixel.y()));
-        in_b.at<cv::Vec2f>(y, x) = cv::Vec2f(static_cast<float>(pixel.x()), static_cast<float>(pixel.y()));
+        samples.push_back({x, y, face, point, static_cast<float>(pixel.x()), static_cast<float>(pixel.y())});
       }
     cv::Mat flow;
     cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
@@ -131,32 +137,25 @@ struct PhotoRefiner::Impl {
     dis->calc(warped, real, flow);
     // Where b's colour landed in a: the surface point both saw lies on a's ray through that pixel
     // and on b's ray through the pixel it was read from.
-    for (int y = 0; y < crop.height; ++y)
-      for (int x = 0; x < crop.width; ++x) {
-        const cv::Vec2f from_b = in_b.at<cv::Vec2f>(y, x);
-        if (from_b[0] < 0.0f) continue;
-        const cv::Vec2f f = flow.at<cv::Vec2f>(y, x);
-        const double magnitude = std::hypot(f[0], f[1]);
-        if (!(magnitude <= options.max_flow_px)) continue;
-        const std::size_t index = static_cast<std::size_t>(y + crop.y) * width + x + crop.x;
-        const Eigen::Vector3d ray_a =
-            ca.rotation.transpose() * (a.K_inverse * Eigen::Vector3d(x + crop.x + f[0], y + crop.y + f[1], 1.0));
-        const Eigen::Vector3d ray_b = cb.rotation.transpose() * (b.K_inverse * Eigen::Vector3d(from_b[0], from_b[1], 1.0));
-        Eigen::Vector3d on_a, on_b;
-        if (!ClosestPoints(a.centre, ray_a, b.centre, ray_b, &on_a, &on_b) || (on_a - on_b).norm() > options.max_ray_gap_m)
-          continue;
-        const Eigen::Vector3d in_a = (a.K_inverse * Eigen::Vector3d(x + crop.x, y + crop.y, 1.0)) / a.inverse_depth[index];
-        const Eigen::Vector3d point = ca.rotation.transpose() * (in_a - ca.translation);
-        const int face = a.face_ids[index];
-        const double offset = (0.5 * (on_a + on_b) - point).dot(face_normals.row(face).transpose());
-        if (!(std::abs(offset) <= options.max_offset_m)) continue;
-        for (int k = 0; k < 3; ++k) {
-          sums->offset(faces(face, k)) += offset;
-          sums->weight(faces(face, k)) += 1.0;
-        }
-        sums->flow_sum += magnitude;
-        ++sums->samples;
+    for (const Sample& sample : samples) {
+      const cv::Vec2f f = flow.at<cv::Vec2f>(sample.y, sample.x);
+      const double magnitude = std::hypot(f[0], f[1]);
+      if (!(magnitude <= options.max_flow_px)) continue;
+      const Eigen::Vector3d ray_a = ca.rotation.transpose() *
+                                    (a.K_inverse * Eigen::Vector3d(sample.x + crop.x + f[0], sample.y + crop.y + f[1], 1.0));
+      const Eigen::Vector3d ray_b = cb.rotation.transpose() * (b.K_inverse * Eigen::Vector3d(sample.b_x, sample.b_y, 1.0));
+      Eigen::Vector3d on_a, on_b;
+      if (!ClosestPoints(a.centre, ray_a, b.centre, ray_b, &on_a, &on_b) || (on_a - on_b).norm() > options.max_ray_gap_m)
+        continue;
+      const double offset = (0.5 * (on_a + on_b) - sample.point).dot(face_normals.row(sample.face).transpose());
+      if (!(std::abs(offset) <= options.max_offset_m)) continue;
+      for (int k = 0; k < 3; ++k) {
+        sums->offset(faces(sample.face, k)) += offset;
+        sums->weight(faces(sample.face, k)) += 1.0;
       }
+      sums->flow_sum += magnitude;
+      ++sums->samples;
+    }
   }
 };
 
@@ -219,6 +218,13 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
     for (int k = 0; k < std::min<int>(s.options.neighbours, by_angle.size()); ++k) pairs.push_back({a, by_angle[k].second});
   }
   const int threads = std::max(1, std::min<int>(s.options.threads, pairs.size()));
+  // Calls work(0) .. work(threads - 1) concurrently.
+  auto in_parallel = [threads](const std::function<void(int)>& work) {
+    std::vector<std::thread> helpers;
+    for (int part = 1; part < threads; ++part) helpers.emplace_back(work, part);
+    work(0);
+    for (std::thread& helper : helpers) helper.join();
+  };
   Mesh mesh;
   mesh.faces = s.faces;
   for (int round = 0; round < s.options.rounds; ++round) {
@@ -228,7 +234,7 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
     auto draw = [&](int part) {
       for (int c = part; c < num_views; c += threads) {
         View& view = views[c];
-        std::fill(view.inverse_depth.begin(), view.inverse_depth.end(), 0.0f);
+        FillBox(view.inverse_depth.data(), view.camera->width, view.box, 0.0f);  // what the last round drew
         s.rasterizer->Project(*view.camera, as_float, &frames[part]);
         view.box = s.rasterizer->Draw(frames[part], 0, view.camera->height, view.inverse_depth.data(), view.face_ids.data());
       }
@@ -239,12 +245,8 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
       for (std::size_t i = part; i < pairs.size(); i += threads)
         s.MeasurePair(views[pairs[i].first], views[pairs[i].second], face_normals, &sums[part]);
     };
-    for (auto work : {std::function<void(int)>(draw), std::function<void(int)>(measure)}) {
-      std::vector<std::thread> helpers;
-      for (int part = 1; part < threads; ++part) helpers.emplace_back(work, part);
-      work(0);
-      for (std::thread& helper : helpers) helper.join();
-    }
+    in_parallel(draw);
+    in_parallel(measure);
     Eigen::MatrixXd offsets = Eigen::MatrixXd::Zero(n, 1);
     std::vector<bool> measured(n, false);
     double flow_sum = 0.0;

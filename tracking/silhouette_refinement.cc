@@ -95,7 +95,8 @@ SilhouetteRefiner::SilhouetteRefiner(SilhouetteRefiner&&) noexcept = default;
 SilhouetteRefiner& SilhouetteRefiner::operator=(SilhouetteRefiner&&) noexcept = default;
 
 RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::vector<Camera>& cameras,
-                                       const std::vector<Image>& masks, SilhouetteRefinementSummary* summary_out) const {
+                                       const std::vector<Image>& masks, SilhouetteRefinementSummary* summary_out,
+                                       int iterations) const {
   const Impl& s = *impl_;
   const int n = static_cast<int>(vertices.rows());
   if (n != s.spread->num_vertices()) throw std::invalid_argument("Refine: the vertex count differs from the scan's");
@@ -131,7 +132,8 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
   RowMatrixX3d before_move = mesh.vertices, move = RowMatrixX3d::Zero(n, 3);
   std::vector<double> iou(cameras.size(), NAN), iou_before_move = iou;
   double mean_iou_before_move = -1.0;
-  for (int round = 0; round < s.options.iterations && !usable.empty(); ++round) {
+  const int rounds = iterations >= 0 ? iterations : s.options.iterations;
+  for (int round = 0; round < rounds && !usable.empty(); ++round) {
     const RowMatrixX3d normals = VertexNormals(mesh);
     std::vector<RowMatrixX3d> step_sums(threads, RowMatrixX3d::Zero(n, 3));
     std::vector<std::vector<int>> counts(threads, std::vector<int>(n, 0));
@@ -178,6 +180,7 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
     mesh.vertices = before_move;
     iou = iou_before_move;
   }
+  if (rounds == 0) summary.iou_before = iou;  // no round measured it
   summary.iou_after = iou;
   const Eigen::VectorXd shift = (mesh.vertices - start).rowwise().norm();
   summary.mean_shift_m = n ? shift.mean() : 0.0;

@@ -62,9 +62,11 @@ class SilhouetteRefiner {
 
   // The scan's `vertices` (posed, metres) moved towards the silhouettes: masks[i] is the
   // 0/255 silhouette in cameras[i], at the camera's resolution (else std::invalid_argument).
-  // Never returns non-finite values.
+  // Never returns non-finite values. `iterations` >= 0 overrides the options' rounds for this call
+  // (e.g. a few rounds to restore the outline after another refinement moved the surface).
   RowMatrixX3d Refine(const RowMatrixX3d& vertices, const std::vector<Camera>& cameras,
-                      const std::vector<Image>& masks, SilhouetteRefinementSummary* summary = nullptr) const;
+                      const std::vector<Image>& masks, SilhouetteRefinementSummary* summary = nullptr,
+                      int iterations = -1) const;
 
  private:
   struct Impl;

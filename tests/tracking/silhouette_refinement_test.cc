@@ -95,6 +95,22 @@ TEST(SilhouetteRefinement, OvershootingStepsAreTakenBack) {
   EXPECT_GT(mean_iou_after(6.0, 12), 0.98);
 }
 
+// A per-call round count overrides the options': 0 rounds leave the vertices as they are, and
+// 3 rounds equal a refiner built with 3.
+TEST(SilhouetteRefinement, RoundsCanBeSetPerCall) {
+  const OffsetSphere sphere;
+  SilhouetteRefiner refiner(sphere.start);
+  SilhouetteRefinementSummary summary;
+  EXPECT_EQ(refiner.Refine(sphere.start.vertices, sphere.cameras, sphere.masks, &summary, 0), sphere.start.vertices);
+  for (std::size_t c = 0; c < sphere.cameras.size(); ++c) EXPECT_EQ(summary.iou_after[c], summary.iou_before[c]) << c;
+  SilhouetteRefinementOptions three;
+  three.iterations = 3;
+  const RowMatrixX3d expected = SilhouetteRefiner(sphere.start, three).Refine(sphere.start.vertices, sphere.cameras, sphere.masks);
+  const RowMatrixX3d refined = refiner.Refine(sphere.start.vertices, sphere.cameras, sphere.masks, nullptr, 3);
+  EXPECT_LT((refined - expected).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_GT((refined - sphere.start.vertices).cwiseAbs().maxCoeff(), 1e-3);
+}
+
 TEST(RasterizeClosedMesh, SphereCoversItsProjectedDisc) {
   const Mesh sphere = MakeUvSphere(0.3, 64, 128);
   const Camera camera = RingCamera(0.3, 0.0);  // the sphere's centre projects to the principal point
