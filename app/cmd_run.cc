@@ -154,6 +154,7 @@ int RunRun(const ParsedArgs& args, const Context& context) {
     throw UsageError("--render-width/--render-height: must be within [16, 8192]");
 
   fs::create_directories(inputs.folder.root);
+  const int stale_temporaries = RemoveStaleTemporaries(inputs.folder.root);
   RecordRun(inputs, args, InputChecksums(capture, inputs), excluded_names);
   // A shard keeps its own log, so that shards running at the same time do not overwrite each other's rows.
   const std::string timings_path =
@@ -164,6 +165,8 @@ int RunRun(const ParsedArgs& args, const Context& context) {
   std::printf("run %s: %d cameras (%zu held out), frames %d:%d, %s\n", inputs.folder.root.c_str(), rig.size(),
               excluded_names.size(), inputs.frames.first, inputs.frames.end,
               inputs.scan_path.empty() ? "no scan (template 3D video)" : ("scan " + inputs.scan_path).c_str());
+  if (stale_temporaries > 0)
+    std::printf("removed %d temporary file(s) left by an interrupted run\n", stale_temporaries);
   std::fflush(stdout);
 
   const BodyTemplate body;

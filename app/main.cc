@@ -1,5 +1,6 @@
 // The confluent command-line tool: dispatches to subcommands, prints errors, sets exit codes.
 
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <iostream>
@@ -113,5 +114,8 @@ int Main(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // keep stdout lines in order with the progress on stderr
+  // A file-size limit (ulimit -f) then fails the write with EFBIG, which is reported with the
+  // file's name, instead of killing the process with SIGXFSZ.
+  std::signal(SIGXFSZ, SIG_IGN);
   return confluent::app::Main(argc, argv);
 }

@@ -1,8 +1,14 @@
 #include "app/run_folder.h"
 
+#include <signal.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <sstream>
+#include <vector>
 
 #include "app/frame_range.h"
 #include "core/atomic_file.h"
@@ -22,6 +28,27 @@ std::string RunFolder::RenderPath(const std::string& view, int frame) const {
   return Path("renders/" + view + "/" + FrameStem(frame) + ".png");
 }
 std::string RunFolder::VideoPath(const std::string& view) const { return Path("renders/" + view + ".mp4"); }
+
+int RemoveStaleTemporaries(const std::string& root) {
+  int removed = 0;
+  std::error_code error;
+  std::vector<fs::path> stale;
+  for (auto it = fs::recursive_directory_iterator(root, error); !error && it != fs::recursive_directory_iterator();
+       it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind(".tmp", 0) != 0) continue;
+    const std::size_t underscore = name.find('_', 4);
+    if (underscore == std::string::npos || underscore == 4 ||
+        name.find_first_not_of("0123456789", 4) != underscore)
+      continue;
+    const long pid = std::strtol(name.c_str() + 4, nullptr, 10);
+    // Alive (or not ours to signal): keep. Our own pid has written nothing yet.
+    if (pid == getpid() || pid <= 0 || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;
+    stale.push_back(it->path());
+  }
+  for (const fs::path& path : stale) removed += fs::remove(path, error) ? 1 : 0;
+  return removed;
+}
 
 TimingLog::TimingLog(std::string path) : path_(std::move(path)) {
   if (!fs::exists(path_)) return;

@@ -19,6 +19,12 @@ struct RunFolder {
   std::string VideoPath(const std::string& view) const;          // renders/<view>.mp4
 };
 
+// Removes the temporary files (`.tmp<pid>_<name>`, see core/atomic_file.h, and ffmpeg's
+// `.tmp<pid>_<name>.log`) that a process which no longer runs left under `root`, e.g. a killed
+// run. Temporaries of live processes (a shard running beside this one) are kept. Returns how
+// many files were removed; errors are ignored (a temporary is never read).
+int RemoveStaleTemporaries(const std::string& root);
+
 // timings.csv: one row per stage and frame (frame -1: work of the stage that is not per frame,
 // e.g. a factorisation). Rows of earlier (resumed) invocations are kept; a frame computed again
 // replaces its row.

@@ -1,9 +1,12 @@
 // The capture-side stages of `confluent run`: silhouettes and tracking.
 
 #include <algorithm>
+#include <atomic>
+#include <exception>
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <thread>
 
 #include "app/run_stages.h"
 #include "core/bvh_io.h"
@@ -35,38 +38,76 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
     report.notes.push_back("masks given: " + inputs.masks_dir);
     return report;
   }
-  // The first frame with a missing mask; everything from there on is (re)computed.
-  int first_missing = inputs.frames.end;
-  for (int frame = inputs.frames.first; frame < inputs.frames.end && first_missing == inputs.frames.end; ++frame)
-    for (int c = 0; c < capture.num_cameras(); ++c)
+  // Per camera, the first frame whose mask is missing: a resumed run continues each camera there.
+  // The extractor is still prepared at the range's first frame (its background refinement uses
+  // the frames from there), so a resumed run writes the masks an uninterrupted one would.
+  const int num_cameras = capture.num_cameras();
+  std::vector<int> first_missing(num_cameras, inputs.frames.end);
+  int frames_done = inputs.frames.end;  // frames with every camera's mask
+  for (int c = 0; c < num_cameras; ++c) {
+    for (int frame = inputs.frames.first; frame < inputs.frames.end; ++frame)
       if (!fs::exists(RunMaskPath(inputs, c, frame))) {
-        first_missing = frame;
+        first_missing[c] = frame;
         break;
       }
-  report.skipped = first_missing - inputs.frames.first;
-  if (first_missing == inputs.frames.end) return report;
+    frames_done = std::min(frames_done, first_missing[c]);
+  }
+  report.skipped = frames_done - inputs.frames.first;
+  if (frames_done == inputs.frames.end) return report;
 
   SilhouetteOptions options;
   options.threads = inputs.threads;
-  std::mutex mutex;
+  options.Check();
+  std::size_t todo = 0;
+  for (int c = 0; c < num_cameras; ++c) todo += inputs.frames.end - first_missing[c];
+  std::mutex mutex;  // guards the notes, the timings, the progress and the first error
   std::map<int, int> cameras_done;
+  for (int frame = frames_done; frame < inputs.frames.end; ++frame)
+    for (int c = 0; c < num_cameras; ++c) cameras_done[frame] += first_missing[c] > frame;
   double last_frame_done = NowSeconds();
-  auto sink = [&](int camera, int frame, const Image&, const Image& mask, const MaskSummary& summary) {
-    const std::string path = RunMaskPath(inputs, camera, frame);
-    fs::create_directories(fs::path(path).parent_path());
-    WriteImage(path, mask);
-    std::lock_guard<std::mutex> lock(mutex);
-    if (summary.empty) report.notes.push_back("empty mask: " + capture.rig().cameras[camera].name + " frame " + std::to_string(frame));
-    if (++cameras_done[frame] == capture.num_cameras()) {
-      const double now = NowSeconds();
-      timings->Add("silhouettes", frame, now - last_frame_done);
-      last_frame_done = now;
+  std::size_t done = 0;
+  std::atomic<int> next_camera{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr error;
+  auto worker = [&]() {
+    try {
+      for (int c = next_camera++; c < num_cameras && !failed; c = next_camera++) {
+        if (first_missing[c] == inputs.frames.end) continue;
+        const Camera& camera = capture.rig().cameras[c];
+        SilhouetteExtractor extractor(
+            camera.name, capture.BackgroundPath(c), [&capture, c](int frame) { return capture.ReadFrame(c, frame); },
+            capture.num_frames(), inputs.frames.first, options);
+        // MOG2 learns from every frame it sees: replay the finished frames (masks not written).
+        const bool stateful = extractor.info().method == SilhouetteMethod::kMog2;
+        for (int frame = stateful ? inputs.frames.first : first_missing[c]; frame < inputs.frames.end && !failed; ++frame) {
+          MaskSummary summary;
+          const Image mask = extractor.Extract(capture.ReadFrame(c, frame), frame, &summary, capture.FramePath(c, frame));
+          if (frame < first_missing[c]) continue;
+          WriteImage(RunMaskPath(inputs, c, frame), mask);
+          std::lock_guard<std::mutex> lock(mutex);
+          if (summary.empty) report.notes.push_back("empty mask: " + camera.name + " frame " + std::to_string(frame));
+          if (++cameras_done[frame] == num_cameras) {
+            const double now = NowSeconds();
+            timings->Add("silhouettes", frame, now - last_frame_done);
+            last_frame_done = now;
+          }
+          ReportProgress(progress, "silhouettes", ++done, todo, camera.name + " frame " + std::to_string(frame));
+        }
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const std::string& warning : extractor.info().warnings) report.notes.push_back(camera.name + ": " + warning);
+      }
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!error) error = std::current_exception();
+      failed = true;
     }
   };
-  const SilhouetteSummary summary =
-      ExtractSilhouettes(capture, first_missing, inputs.frames.end, options, sink, progress);
-  for (const std::string& warning : summary.warnings) report.notes.push_back(warning);
-  report.computed = inputs.frames.end - first_missing;
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::min(options.threads, num_cameras); ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& thread : pool) thread.join();
+  if (error) std::rethrow_exception(error);
+  report.computed = inputs.frames.end - frames_done;
   report.seconds = NowSeconds() - start;
   timings->Save();
   return report;

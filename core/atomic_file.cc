@@ -2,6 +2,11 @@
 
 #include <unistd.h>
 
+#include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -10,6 +15,36 @@
 
 namespace confluent {
 namespace fs = std::filesystem;
+
+std::string WriteErrorText(int code) {
+  if (code == EFBIG || code == ENOSPC || code == EDQUOT) return std::string(std::strerror(code)) + " (file too large or disk full)";
+  if (code == 0) return "disk full or no permission?";
+  return std::strerror(code);
+}
+
+void KillHookBeforeRename(const std::string& path) {
+  struct KillAt {
+    std::string substring;  // empty: the hook is off
+    long count = 0;
+  };
+  static const KillAt kill_at = [] {
+    KillAt parsed;
+    const char* value = std::getenv("CONFLUENT_KILL_AT");
+    if (value == nullptr) return parsed;
+    const std::string text(value);
+    const std::size_t colon = text.rfind(':');
+    if (colon == std::string::npos || colon == 0) return parsed;
+    char* end = nullptr;
+    const long count = std::strtol(text.c_str() + colon + 1, &end, 10);
+    if (end == text.c_str() + colon + 1 || *end != '\0' || count < 1) return parsed;
+    parsed.substring = text.substr(0, colon);
+    parsed.count = count;
+    return parsed;
+  }();
+  if (kill_at.substring.empty() || path.find(kill_at.substring) == std::string::npos) return;
+  static std::atomic<long> seen{0};  // writes that matched so far (masks are written by several threads)
+  if (++seen == kill_at.count) std::raise(SIGKILL);
+}
 
 void WriteAtomically(const std::string& path, const std::function<void(const std::string&)>& write) {
   const fs::path target(path);
@@ -31,6 +66,7 @@ void WriteAtomically(const std::string& path, const std::function<void(const std
     throw;
   }
   if (!fs::exists(temporary, error)) throw OutputError(path, "writing failed (no output was produced)");
+  KillHookBeforeRename(path);
   fs::rename(temporary, target, error);
   if (error) {
     fs::remove(temporary, error);
@@ -41,9 +77,16 @@ void WriteAtomically(const std::string& path, const std::function<void(const std
 void WriteTextFile(const std::string& path, const std::string& contents) {
   WriteAtomically(path, [&](const std::string& temporary) {
     std::ofstream out(temporary, std::ios::binary);
+    if (!out) throw OutputError(temporary, std::string("cannot open for writing: ") + std::strerror(errno));
+    errno = 0;
     out << contents;
     out.flush();
-    if (!out) throw OutputError(temporary, "write failed (disk full or no permission?)");
+    const int flush_errno = errno;
+    out.close();  // close() too: a failure there (e.g. a full disk over NFS) also loses data
+    if (!out) {
+      const int code = flush_errno != 0 ? flush_errno : errno;
+      throw OutputError(temporary, "write failed: " + WriteErrorText(code));
+    }
   });
 }
 

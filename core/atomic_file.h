@@ -11,6 +11,17 @@ namespace confluent {
 // was, and OutputError naming `path` is thrown.
 void WriteAtomically(const std::string& path, const std::function<void(const std::string&)>& write);
 
+// Test hook, called by WriteAtomically (and VideoWriter::Close) after the temporary file of
+// `path` is fully written and before it is renamed to `path`: when the environment variable
+// CONFLUENT_KILL_AT is `SUBSTRING:N` (read once), the process sends itself SIGKILL on the N-th
+// such call whose `path` contains SUBSTRING, so tests can kill a run at a chosen, repeatable
+// point. Does nothing when the variable is unset or malformed.
+void KillHookBeforeRename(const std::string& path);
+
+// The reason for a failed write, from its errno `code`: strerror, and for EFBIG/ENOSPC/EDQUOT
+// "(file too large or disk full)"; 0 (unknown) gives a generic guess.
+std::string WriteErrorText(int code);
+
 // Writes `contents` to `path` atomically. Throws OutputError on failure.
 void WriteTextFile(const std::string& path, const std::string& contents);
 

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <vector>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 extern char** environ;
@@ -245,6 +246,7 @@ void VideoWriter::Close() {
     s.RemoveTemporaries();
     throw OutputError(s.path, "ffmpeg produced no output file");
   }
+  KillHookBeforeRename(s.path);
   fs::rename(s.temporary_path, s.path, error);
   if (error) {
     s.RemoveTemporaries();
