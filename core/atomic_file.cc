@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -17,7 +18,7 @@ namespace confluent {
 namespace fs = std::filesystem;
 
 std::string WriteErrorText(int code) {
-  if (code == EFBIG || code == ENOSPC || code == EDQUOT) return std::string(std::strerror(code)) + " (file too large or disk full)";
+  if (code == EFBIG || code == ENOSPC || code == EDQUOT) return "file too large or disk full (" + std::string(std::strerror(code)) + ")";
   if (code == 0) return "disk full or no permission?";
   return std::strerror(code);
 }
@@ -74,20 +75,20 @@ void WriteAtomically(const std::string& path, const std::function<void(const std
   }
 }
 
+void WriteFileBytes(const std::string& path, const void* data, std::size_t size) {
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) throw OutputError(path, std::string("cannot open for writing: ") + std::strerror(errno));
+  errno = 0;
+  const std::size_t written = std::fwrite(data, 1, size, file);
+  const bool failed = written != size || std::fflush(file) != 0;
+  const int write_errno = errno;
+  errno = 0;
+  const bool close_failed = std::fclose(file) != 0;
+  if (failed || close_failed) throw OutputError(path, "write failed: " + WriteErrorText(failed ? write_errno : errno));
+}
+
 void WriteTextFile(const std::string& path, const std::string& contents) {
-  WriteAtomically(path, [&](const std::string& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    if (!out) throw OutputError(temporary, std::string("cannot open for writing: ") + std::strerror(errno));
-    errno = 0;
-    out << contents;
-    out.flush();
-    const int flush_errno = errno;
-    out.close();  // close() too: a failure there (e.g. a full disk over NFS) also loses data
-    if (!out) {
-      const int code = flush_errno != 0 ? flush_errno : errno;
-      throw OutputError(temporary, "write failed: " + WriteErrorText(code));
-    }
-  });
+  WriteAtomically(path, [&](const std::string& temporary) { WriteFileBytes(temporary, contents.data(), contents.size()); });
 }
 
 std::string ReadTextFile(const std::string& path) {

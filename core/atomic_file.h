@@ -1,6 +1,7 @@
 #pragma once
 // Atomic output: write to a temporary file beside the target, then rename over it.
 
+#include <cstddef>
 #include <functional>
 #include <string>
 
@@ -21,6 +22,11 @@ void KillHookBeforeRename(const std::string& path);
 // The reason for a failed write, from its errno `code`: strerror, and for EFBIG/ENOSPC/EDQUOT
 // "(file too large or disk full)"; 0 (unknown) gives a generic guess.
 std::string WriteErrorText(int code);
+
+// Writes `size` bytes to `path` directly (no temporary: meant for the temporary path given by
+// WriteAtomically), checking every step including fflush and fclose. Throws OutputError naming
+// `path` with WriteErrorText's reason.
+void WriteFileBytes(const std::string& path, const void* data, std::size_t size);
 
 // Writes `contents` to `path` atomically. Throws OutputError on failure.
 void WriteTextFile(const std::string& path, const std::string& contents);

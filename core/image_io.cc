@@ -1,5 +1,6 @@
 #include "core/image_io.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <filesystem>
@@ -73,10 +74,15 @@ void WriteImage(const std::string& path, const Image& image) {
     const std::string extension = std::filesystem::path(path).extension().string();
     if (extension == ".png" || extension == ".PNG") spec.attribute("png:compressionLevel", 1);  // fast: frames are written by the thousand
     if (extension == ".jpg" || extension == ".jpeg") spec.attribute("CompressionQuality", 95);
+    // Encode into memory, then write the bytes with checked writes: OIIO's PNG writer does not
+    // report a short write (a full disk or a file-size limit left a truncated file behind).
+    OIIO::Filesystem::IOVecOutput encoded;
+    const bool in_memory = output->supports("ioproxy") && output->set_ioproxy(&encoded);
     if (!output->open(temporary, spec)) throw OutputError(path, "cannot open for writing: " + output->geterror());
     if (!output->write_image(OiioType(image.type), image.data.data()))
       throw OutputError(path, "write failed (disk full?): " + output->geterror());
     if (!output->close()) throw OutputError(path, "write failed (disk full?): " + output->geterror());
+    if (in_memory) WriteFileBytes(temporary, encoded.buffer().data(), encoded.buffer().size());
   });
 }
 

@@ -89,16 +89,7 @@ void AppendInt(std::string* out, long long value) {
 }
 
 // Writes `bytes` to `path` (called on the temporary file of WriteAtomically).
-void WriteBytes(const std::string& path, const std::string& bytes) {
-  std::FILE* file = std::fopen(path.c_str(), "wb");
-  if (file == nullptr) throw OutputError(path, std::string("cannot open for writing: ") + std::strerror(errno));
-  errno = 0;
-  const std::size_t written = std::fwrite(bytes.data(), 1, bytes.size(), file);
-  const bool failed = written != bytes.size() || std::fflush(file) != 0;
-  const int write_errno = errno;
-  if (std::fclose(file) != 0 || failed)
-    throw OutputError(path, "write failed: " + WriteErrorText(failed ? write_errno : errno));
-}
+void WriteBytes(const std::string& path, const std::string& bytes) { WriteFileBytes(path, bytes.data(), bytes.size()); }
 
 // `target` relative to the folder `base` when possible (both made absolute), else absolute.
 std::string RelativeOrAbsolute(const std::string& target, const fs::path& base) {

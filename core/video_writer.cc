@@ -241,6 +241,13 @@ void VideoWriter::Close() {
                                                                                std::to_string(status)) +
                                   (tail.empty() ? "" : ": " + tail));
   }
+  // ffmpeg (5.1) exits 0 when writing the file fails at the end ("Error writing trailer of ...:
+  // File too large"), leaving a truncated file: its log (errors only) must name no error.
+  const std::string log = TailOfFile(s.log_path, 3);
+  if (log.find("Error") != std::string::npos || log.find("error") != std::string::npos) {
+    s.RemoveTemporaries();
+    throw OutputError(s.path, "ffmpeg could not write the video: " + log);
+  }
   std::error_code error;
   if (!fs::exists(s.temporary_path, error)) {
     s.RemoveTemporaries();
