@@ -1,18 +1,19 @@
 // End-to-end tests of `confluent run` and `confluent evaluate` on the tiny studio capture:
-// outputs against the studio's ground truth, resuming after a kill (file modification times),
-// and bad input (clear message, non-zero exit, finished output kept).
+// outputs against the studio's ground truth, resuming after a SIGKILL in every stage (same
+// outputs, finished files untouched, no partial file under a final name), a full disk, and bad
+// input (clear message, non-zero exit, finished output kept).
 
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <nlohmann/json.hpp>
-#include <thread>
 
+#include "core/image_io.h"
+#include "core/mesh_io.h"
 #include "tests/support/test_support.h"
 
 namespace confluent {
@@ -39,6 +40,16 @@ class RunCommandTest : public ::testing::Test {
     return {"run", Capture(), "--out", run, "--exclude-camera", "holdout0", "--exclude-camera", "holdout1",
             "--render-width", "160", "--render-height", "120"};
   }
+  // An uninterrupted run of RunArgs, made once for the suite (do not modify it).
+  static const std::string& ReferenceRun() {
+    static const std::string run = [] {
+      const std::string path = *dir_ / "reference_run";
+      const testing::CommandResult result = RunConfluent(RunArgs(path));
+      EXPECT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
+      return path;
+    }();
+    return run;
+  }
   static testing::TempDir* dir_;
 };
 testing::TempDir* RunCommandTest::dir_ = nullptr;
@@ -57,15 +68,67 @@ int CountFiles(const std::string& dir, const std::string& extension) {
   return n;
 }
 
-// SIGKILLs every process whose command line mentions `marker` (no pkill needed).
-void KillProcessesMentioning(const std::string& marker) {
-  for (const auto& entry : fs::directory_iterator("/proc")) {
-    const std::string name = entry.path().filename().string();
-    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    std::ifstream in(entry.path() / "cmdline", std::ios::binary);
-    std::string cmdline((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (cmdline.find(marker) != std::string::npos && cmdline.find("confluent") != std::string::npos)
-      ::kill(std::stoi(name), SIGKILL);
+bool IsTemporary(const fs::path& path) { return path.filename().string().rfind(".tmp", 0) == 0; }
+
+// Drops every "seconds" member (wall-clock time of a step) from a JSON value.
+void DropSeconds(nlohmann::json* json) {
+  if (json->is_object()) {
+    json->erase("seconds");
+    for (auto& [key, value] : json->items()) DropSeconds(&value);
+  } else if (json->is_array()) {
+    for (auto& value : *json) DropSeconds(&value);
+  }
+}
+
+// The outputs of a run folder, for comparing two runs: relative path -> contents. Everything the
+// run computes is deterministic (the tiny run twice, and a run killed and resumed 13 times, gave
+// the same bytes; threads only split work by camera or by independent rows), so files are
+// compared byte for byte, except what records the run rather than its result:
+// - timings.csv (wall-clock seconds) is left out;
+// - tracking/<frame>.json and poses.json hold the tracking time of each frame ("seconds"):
+//   compared as JSON without those members;
+// - run.json: without options.out (the folder's own name).
+std::map<std::string, std::string> RunOutputs(const std::string& root) {
+  std::map<std::string, std::string> outputs;
+  for (const auto& entry : fs::recursive_directory_iterator(root)) {
+    if (!entry.is_regular_file() || IsTemporary(entry.path())) continue;
+    const std::string file = fs::relative(entry.path(), root).string();
+    if (file == "timings.csv") continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (file == "poses.json" || file.rfind("tracking/", 0) == 0 || file == "run.json") {
+      nlohmann::json json = nlohmann::json::parse(bytes);
+      DropSeconds(&json);
+      if (file == "run.json") json["options"].erase("out");
+      bytes = json.dump();
+    }
+    outputs[file] = bytes;
+  }
+  return outputs;
+}
+
+// Every file under its final name in `root` reads back (PLY, PNG, JSON); temporaries are named
+// .tmp<pid>_<name> and are the only files allowed to be partial.
+void ExpectEveryFileParses(const std::string& root, const std::string& when) {
+  for (const auto& entry : fs::recursive_directory_iterator(root)) {
+    if (!entry.is_regular_file()) continue;
+    const fs::path& path = entry.path();
+    const std::string name = path.filename().string();
+    if (IsTemporary(path)) {
+      EXPECT_NE(name.find('_'), std::string::npos) << when << ": " << path;
+      EXPECT_EQ(name.find_first_not_of("0123456789", 4), name.find('_')) << when << ": " << path;
+      continue;
+    }
+    const std::string extension = path.extension().string();
+    try {
+      if (extension == ".ply") ReadMesh(path.string());
+      if (extension == ".png") ReadImage(path.string());
+      if (extension == ".json") {
+        EXPECT_FALSE(nlohmann::json::parse(std::ifstream(path)).is_null()) << path;
+      }
+    } catch (const std::exception& error) {
+      ADD_FAILURE() << when << ": " << path << " is partial or corrupt: " << error.what();
+    }
   }
 }
 
@@ -149,49 +212,94 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
   EXPECT_EQ(nearest["scan"]["iou_mean"], metrics["scan"]["iou_mean"]);
 }
 
-TEST_F(RunCommandTest, KilledRunResumesWithoutRecomputingFinishedFrames) {
+// A chain of runs in one folder, each killed (SIGKILL, through the CONFLUENT_KILL_AT hook of
+// core/atomic_file.h) at a chosen file: after its temporary is complete, before the rename. The
+// next run resumes where the previous one stopped, so every stage is hit at least twice:
+// silhouettes, tracking (and its aggregate poses.json), correspondences (the registration's
+// reference template, then the correspondences), deform with the silhouette and photo
+// refinement (they write only scan/<frame>.ply, at the end of each frame), render (frames, then
+// the video). After each kill: the file is not under its final name, every final file parses,
+// and the only temporaries are the killed process's (the next run removes them). No run
+// rewrites a file that existed before it, except the by-design ones (kRewritten). The last run
+// completes and its outputs equal an uninterrupted run's (RunOutputs).
+TEST_F(RunCommandTest, KilledInEveryStageResumesToTheUninterruptedOutputs) {
+  const auto reference = RunOutputs(ReferenceRun());
+  ASSERT_EQ(CountFiles(ReferenceRun() + "/scan", ".ply"), 10);
   testing::TempDir out;
   const std::string run = out / "run";
-  std::atomic<bool> finished{false};
-  testing::CommandResult first;
-  std::thread runner([&] {
-    first = RunConfluent(RunArgs(run));
-    finished = true;
-  });
-  // Kill it once a few frames are tracked.
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-  while (!finished && !fs::exists(run + "/tracking/000003.json") && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  KillProcessesMentioning(run);
-  runner.join();
-  ASSERT_NE(first.exit_code, 0) << "the run finished before it could be killed";
-  ASSERT_TRUE(fs::exists(run + "/tracking/000003.json"));
-  ASSERT_LT(CountFiles(run + "/scan", ".ply"), 10);
-  const auto before = ModificationTimes(run);
-
-  const testing::CommandResult second = RunConfluent(RunArgs(run));
-  ASSERT_EQ(second.exit_code, 0) << second.stdout_text << second.stderr_text;
-  EXPECT_EQ(CountFiles(run + "/template", ".ply"), 10);
-  EXPECT_EQ(CountFiles(run + "/scan", ".ply"), 10);
-  const auto after = ModificationTimes(run);
-  int kept = 0;
-  for (const auto& [file, time] : before) {
-    if (file == "timings.csv" || file.find(".tmp") != std::string::npos) continue;  // the log is rewritten by design
-    if (file.rfind("masks/", 0) == 0 || file.rfind("tracking/", 0) == 0 || file.rfind("template/", 0) == 0) {
-      ASSERT_TRUE(after.count(file)) << file;
-      EXPECT_EQ(after.at(file), time) << file << " was recomputed";
-      ++kept;
+  // Rewritten by every run by design: the timing log, and poses.json and motion.bvh, which the
+  // tracking stage regenerates over every tracked frame (all shards) each time it ends.
+  const std::set<std::string> kRewritten = {"timings.csv", "poses.json", "motion.bvh"};
+  struct KillPoint {
+    std::string file;       // killed before this file's rename (its 1st write in that run)
+    std::string unfinished;  // a file of the same, unfinished, frame or step that is written
+                             // first and so is recomputed by the resume ("" when none)
+  };
+  const std::vector<KillPoint> kills = {
+      // silhouettes: cameras run in parallel from frame 0, holdout1 (the last camera) starts
+      // only after cam00, cam02, cam03 and holdout0 finish, long after cam01 reaches frame 3.
+      {"masks/cam01/000003.png", ""},
+      {"masks/holdout1/000009.png", ""},
+      // tracking: the state file is written last and marks the frame finished.
+      {"tracking/000002.json", "template/000002.ply"},
+      {"template/000006.ply", ""},
+      {"poses.json", ""},
+      // correspondences
+      {"template_reference.ply", ""},
+      {"correspondences.json", "template_reference.ply"},
+      // deform + silhouette refinement + photo refinement (one file per frame)
+      {"scan/000001.ply", ""},
+      {"scan/000004.ply", ""},
+      {"scan/000008.ply", ""},
+      // render
+      {"renders/orbit/000002.png", ""},
+      {"renders/orbit/000007.png", ""},
+      {"renders/orbit.mp4", ""},
+  };
+  std::string previous_unfinished;
+  for (const KillPoint& kill : kills) {
+    const auto before = fs::exists(run) ? ModificationTimes(run) : std::map<std::string, fs::file_time_type>{};
+    const testing::CommandResult result =
+        RunConfluent(RunArgs(run), "export CONFLUENT_KILL_AT='" + kill.file + ":1';");
+    ASSERT_EQ(result.exit_code, 128 + SIGKILL) << "not killed at " << kill.file << "\n" << result.stdout_text << result.stderr_text;
+    EXPECT_FALSE(fs::exists(fs::path(run) / kill.file)) << kill.file;
+    ExpectEveryFileParses(run, "killed at " + kill.file);
+    std::set<std::string> temporary_pids;
+    for (const auto& [file, time] : ModificationTimes(run)) {
+      const std::string name = fs::path(file).filename().string();
+      if (IsTemporary(name)) temporary_pids.insert(name.substr(4, name.find('_') - 4));
     }
+    EXPECT_EQ(temporary_pids.size(), 1u) << "killed at " << kill.file << ": the temporaries of earlier runs are removed";
+    const auto after = ModificationTimes(run);
+    for (const auto& [file, time] : before) {
+      if (kRewritten.count(file) || IsTemporary(fs::path(file).filename()) || file == previous_unfinished) continue;
+      ASSERT_TRUE(after.count(file)) << file << " vanished in the run killed at " << kill.file;
+      EXPECT_EQ(after.at(file), time) << file << " was rewritten by the run killed at " << kill.file;
+    }
+    previous_unfinished = kill.unfinished;
   }
-  EXPECT_GE(kept, 4 * 6 + 2 * 4);  // at least 4 frames of masks and of tracking state + template
-  // A third invocation has nothing left to do.
-  const auto finished_times = ModificationTimes(run);
-  const testing::CommandResult third = RunConfluent(RunArgs(run));
-  ASSERT_EQ(third.exit_code, 0) << third.stderr_text;
+  const auto before = ModificationTimes(run);
+  const testing::CommandResult last = RunConfluent(RunArgs(run));
+  ASSERT_EQ(last.exit_code, 0) << last.stdout_text << last.stderr_text;
+  const auto after = ModificationTimes(run);
+  for (const auto& [file, time] : before) {
+    if (kRewritten.count(file) || IsTemporary(fs::path(file).filename()) || file == previous_unfinished) continue;
+    ASSERT_TRUE(after.count(file)) << file;
+    EXPECT_EQ(after.at(file), time) << file << " was rewritten by the last resume";
+  }
+  for (const auto& [file, time] : after) EXPECT_FALSE(IsTemporary(fs::path(file).filename())) << file;
+  const auto resumed = RunOutputs(run);
+  for (const auto& [file, bytes] : reference) {
+    ASSERT_TRUE(resumed.count(file)) << file << " missing after the resumes";
+    EXPECT_TRUE(resumed.at(file) == bytes) << file << " differs from the uninterrupted run's";
+  }
+  EXPECT_EQ(resumed.size(), reference.size());
+  // Once finished, a run has nothing left to do.
+  const testing::CommandResult again = RunConfluent(RunArgs(run));
+  ASSERT_EQ(again.exit_code, 0) << again.stderr_text;
   for (const auto& [file, time] : ModificationTimes(run)) {
-    if (file.rfind("scan/", 0) == 0 || file.rfind("renders/orbit/", 0) == 0) {
-      EXPECT_EQ(finished_times.at(file), time) << file;
-    }
+    if (kRewritten.count(file)) continue;
+    EXPECT_EQ(after.at(file), time) << file << " was rewritten by a finished run";
   }
 }
 
@@ -258,20 +366,35 @@ TEST_F(RunCommandTest, OpenScanIsRefused) {
   EXPECT_NE(result.stderr_text.find("watertight"), std::string::npos) << result.stderr_text;
 }
 
+// A file-size limit stands in for a full disk: the app ignores SIGXFSZ, so the write fails with
+// EFBIG and the run stops with one message naming the file.
 TEST_F(RunCommandTest, WriteFailureIsReportedAndFinishedFilesAreKept) {
   testing::TempDir out;
   const std::string run = out / "run";
-  // A file-size limit of 64 KiB: the masks fit, the first animated scan does not (as on a full disk).
-  const testing::CommandResult result = RunConfluent(RunArgs(run), "trap '' XFSZ; ulimit -f 128;");
-  EXPECT_NE(result.exit_code, 0);
-  EXPECT_NE(result.stderr_text.find("error"), std::string::npos) << result.stderr_text;
+  // 256 blocks: 128 KiB in dash's 512-byte blocks (256 KiB in bash's 1024-byte ones). The masks,
+  // the tracking (posed templates of 80 KiB, poses.json of 68 KiB) and the correspondences fit,
+  // the first animated scan (290 KiB) does not.
+  const testing::CommandResult result = RunConfluent(RunArgs(run), "ulimit -f 256;");
+  EXPECT_EQ(result.exit_code, 1) << result.stderr_text;
+  const std::string message = "confluent run: error: " + run + "/scan/000000.ply: write failed: file too large or disk full";
+  const std::size_t at = result.stderr_text.find(message);
+  EXPECT_NE(at, std::string::npos) << result.stderr_text;
+  int messages = 0;
+  for (std::size_t i = result.stderr_text.find("error:"); i != std::string::npos; i = result.stderr_text.find("error:", i + 1))
+    ++messages;
+  EXPECT_EQ(messages, 1) << "one message: " << result.stderr_text;
   EXPECT_EQ(CountFiles(run + "/masks/cam00", ".png"), 10);
-  // No partial file is left under a final name.
-  for (const auto& entry : fs::recursive_directory_iterator(run)) {
-    if (entry.path().extension() == ".ply") {
-      EXPECT_EQ(RunConfluent({"mesh", "info", entry.path().string()}).exit_code, 0) << entry.path();
-    }
-  }
+  EXPECT_EQ(CountFiles(run + "/tracking", ".json"), 10);
+  EXPECT_TRUE(fs::exists(run + "/correspondences.json"));
+  EXPECT_EQ(CountFiles(run + "/scan", ".ply"), 0);
+  // No partial file is left under a final name, and no temporary is left at all.
+  ExpectEveryFileParses(run, "after the failed write");
+  for (const auto& [file, time] : ModificationTimes(run)) EXPECT_FALSE(IsTemporary(fs::path(file).filename())) << file;
+
+  // Space again: the run completes, as if it had never stopped.
+  const testing::CommandResult resumed = RunConfluent(RunArgs(run));
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.stdout_text << resumed.stderr_text;
+  EXPECT_TRUE(RunOutputs(run) == RunOutputs(ReferenceRun()));
 }
 
 }  // namespace
