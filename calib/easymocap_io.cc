@@ -29,6 +29,8 @@ void OpenYaml(const std::string& path, YamlFile* file) {
     file->storage.open(path, cv::FileStorage::READ);
   } catch (const cv::Exception& exception) {
     throw InputError(path, "cannot parse YAML: " + exception.err);
+  } catch (const std::exception& exception) {  // OpenCV's parser also lets std::length_error through
+    throw InputError(path, std::string("cannot parse YAML: ") + exception.what());
   }
   if (!file->storage.isOpened()) throw InputError(path, "cannot open as OpenCV YAML");
 }
@@ -77,7 +79,7 @@ bool ReadMatrix(const cv::FileNode& node, const std::string& path, const std::st
     throw InputError(path, "camera " + camera + ": " + key + " must be numeric (a number or matrix), got " + NodeText(node));
   }
   const int count = data.isSeq() ? static_cast<int>(data.size()) : 1;
-  if (rows < 0 || cols < 0 || count != rows * cols) {
+  if (rows < 0 || cols < 0 || count != static_cast<long long>(rows) * cols) {
     std::ostringstream out;
     out << "camera " << camera << ": " << key << " has " << count << " values for a " << rows << "x" << cols
         << " matrix";

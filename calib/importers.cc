@@ -493,10 +493,12 @@ Rig ReadQualisys(const std::string& path) {
     double skew = 0.0;
     if (in.attributes.count("skew")) skew = XmlNumber(in, "skew", path, where) / 64.0;
     camera.K = IntrinsicMatrix(fu, fv, cu, cv, skew);
-    camera.dist << XmlNumber(in, "radialDistortion1", path, where) / 64.0,
-        XmlNumber(in, "radialDistortion2", path, where) / 64.0,
-        XmlNumber(in, "tangentalDistortion1", path, where) / 64.0,
-        XmlNumber(in, "tangentalDistortion2", path, where) / 64.0, 0.0;
+    // Read before assigning: an exception inside Eigen's comma initializer would abort.
+    const double k1 = XmlNumber(in, "radialDistortion1", path, where) / 64.0;
+    const double k2 = XmlNumber(in, "radialDistortion2", path, where) / 64.0;
+    const double p1 = XmlNumber(in, "tangentalDistortion1", path, where) / 64.0;
+    const double p2 = XmlNumber(in, "tangentalDistortion2", path, where) / 64.0;
+    camera.dist << k1, k2, p1, p2, 0.0;
     if (in.attributes.count("radialDistortion3")) camera.dist[4] = XmlNumber(in, "radialDistortion3", path, where) / 64.0;
     const XmlElement& tr = transform[0];
     Eigen::Matrix3d rotation;
@@ -577,11 +579,20 @@ cv::FileNode FirstNode(const cv::FileStorage& storage, std::initializer_list<con
 
 bool ReadCvMatrix(const cv::FileNode& node, const std::string& path, const std::string& what, Eigen::MatrixXd* matrix) {
   if (node.empty() || node.isNone()) return false;
+  // OpenCV allocates rows x cols before it looks at the data: refuse absurd sizes first.
+  if (node.isMap()) {
+    const cv::FileNode rows = node["rows"], cols = node["cols"];
+    if (!rows.isInt() || !cols.isInt() || static_cast<int>(rows) < 0 || static_cast<int>(cols) < 0 ||
+        static_cast<long long>(static_cast<int>(rows)) * static_cast<int>(cols) > 1024)
+      throw InputError(path, what + ": not a small numeric matrix (rows and cols must be integers, at most 1024 values)");
+  }
   cv::Mat mat;
   try {
     node >> mat;
   } catch (const cv::Exception& exception) {
     throw InputError(path, what + ": not a numeric matrix (" + exception.err + ")");
+  } catch (const std::exception& exception) {
+    throw InputError(path, what + ": not a numeric matrix (" + exception.what() + ")");
   }
   if (mat.empty()) throw InputError(path, what + ": not a numeric matrix");
   mat.convertTo(mat, CV_64F);
@@ -600,7 +611,7 @@ bool HasCvExtrinsics(const std::string& path) {
     if (!storage.isOpened()) return false;
     return !FirstNode(storage, {"CameraMatrix", "camera_matrix", "K"}).isNone() &&
            !FirstNode(storage, {"rvec", "Rotation", "R", "rotation"}).isNone();
-  } catch (const cv::Exception&) {
+  } catch (const std::exception&) {  // cv::Exception, or std::length_error from OpenCV's parser
     return false;
   }
 }
@@ -611,6 +622,8 @@ Camera ReadOpenCvCamera(const std::string& path, const std::string& name, const 
     storage.open(path, cv::FileStorage::READ);
   } catch (const cv::Exception& exception) {
     throw InputError(path, "cannot parse OpenCV XML/YAML: " + exception.err);
+  } catch (const std::exception& exception) {  // OpenCV's parser also lets std::length_error through
+    throw InputError(path, std::string("cannot parse OpenCV XML/YAML: ") + exception.what());
   }
   if (!storage.isOpened()) throw InputError(path, "cannot open as OpenCV XML/YAML");
   Camera camera;
@@ -656,6 +669,9 @@ Camera ReadOpenCvCamera(const std::string& path, const std::string& name, const 
   const cv::FileNode width = FirstNode(storage, {"image_width", "ImageWidth", "width"});
   const cv::FileNode height = FirstNode(storage, {"image_height", "ImageHeight", "height"});
   if ((width.isInt() || width.isReal()) && (height.isInt() || height.isReal())) {
+    for (const cv::FileNode& size : {width, height})
+      if (!(static_cast<double>(size) > 0.0 && static_cast<double>(size) <= 1e6))
+        throw InputError(path, where + ": image size must be between 1 and 1000000 pixels");
     camera.width = static_cast<int>(static_cast<double>(width));
     camera.height = static_cast<int>(static_cast<double>(height));
   } else if (options.default_width > 0 && options.default_height > 0) {

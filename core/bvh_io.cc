@@ -169,7 +169,7 @@ BvhMotion ReadBvh(const std::string& path, const BvhReadOptions& options) {
   tokens.Expect("Frames:");
   int frames_line = tokens.line();
   const double num_frames = tokens.Number();
-  if (num_frames < 0 || num_frames != std::floor(num_frames)) tokens.Fail(frames_line, "bad frame count");
+  if (num_frames < 0 || num_frames != std::floor(num_frames) || num_frames > 1e9) tokens.Fail(frames_line, "bad frame count");
   tokens.Expect("Frame");
   tokens.Expect("Time:");
   motion.frame_time_s = tokens.Number();

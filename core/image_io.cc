@@ -11,6 +11,9 @@
 namespace confluent {
 namespace {
 
+// ReadImage refuses images whose pixels would need more memory than this.
+constexpr std::size_t kMaxImageBytes = std::size_t{1} << 30;
+
 OIIO::TypeDesc OiioType(PixelType type) {
   switch (type) {
     case PixelType::kUInt8: return OIIO::TypeDesc::UINT8;
@@ -44,6 +47,12 @@ Image ReadImage(const std::string& path) {
   PixelType type = PixelType::kFloat32;
   if (spec.format == OIIO::TypeDesc::UINT8) type = PixelType::kUInt8;
   else if (spec.format == OIIO::TypeDesc::UINT16) type = PixelType::kUInt16;
+  // The header's size is believed only up to 1 GiB of pixels (an 8K RGBA float image): a
+  // corrupt or hostile header must not make us allocate without bound.
+  const double bytes = static_cast<double>(spec.width) * spec.height * spec.nchannels * BytesPerChannel(type);
+  if (bytes > static_cast<double>(kMaxImageBytes))
+    throw InputError(path, "image too large: " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " with " +
+                               std::to_string(spec.nchannels) + " channels needs more than 1 GiB (corrupt header?)");
   Image image(spec.width, spec.height, spec.nchannels, type);
   const bool ok = input->read_image(0, 0, 0, spec.nchannels, OiioType(type), image.data.data());
   std::string message = input->geterror();

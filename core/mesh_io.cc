@@ -695,7 +695,10 @@ Mesh ReadPly(const std::string& path) {
             }
             if (count < 3) reader.Fail("face " + std::to_string(f) + " has fewer than 3 vertices");
           } else if (has_label && static_cast<int>(p) == label) {
-            face_label = static_cast<int>(reader.Read(property.type));
+            const double value = reader.Read(property.type);
+            if (!(std::abs(value) <= std::numeric_limits<int>::max()))
+              reader.Fail("label " + std::to_string(value) + " is not an int");
+            face_label = static_cast<int>(value);
           } else if (has_texcoord && static_cast<int>(p) == texcoord) {
             const std::size_t count = reader.ReadCount(property);
             for (std::size_t k = 0; k < count; ++k) polygon_uv.push_back(reader.Read(property.type));
@@ -720,7 +723,7 @@ Mesh ReadPly(const std::string& path) {
         mesh.uvs = Eigen::Map<const RowMatrixX2d>(uvs.data(), static_cast<Eigen::Index>(uvs.size() / 2), 2);
         mesh.face_uvs = Eigen::Map<const RowMatrixX3i>(face_uvs.data(), static_cast<Eigen::Index>(face_uvs.size() / 3), 3);
       }
-    } else {
+    } else if (!element.properties.empty()) {  // an element without properties has no data
       for (std::size_t i = 0; i < element.count; ++i) {
         reader.SetLocation(element.name, i);
         for (const auto& property : element.properties) reader.Skip(property);

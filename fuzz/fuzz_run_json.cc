@@ -1,0 +1,14 @@
+// libFuzzer target: run.json as `confluent view` reads it (app/viewer_run.cc OpenViewerRun,
+// compiled into this target). The run folder holds the fuzzed run.json and one (empty) frame
+// file, so that the frame-range part of run.json is read as well.
+#include "app/viewer_run.h"
+#include "fuzz/fuzz_util.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace confluent;
+  const std::string json_path = fuzz::WriteScratch("run/run.json", fuzz::Bytes(data, size));
+  static const std::string frame = fuzz::WriteScratch("run/scan/000003.ply", "");
+  const std::string root = std::filesystem::path(json_path).parent_path().string();
+  fuzz::ExpectTypedErrors([&] { app::OpenViewerRun(root); });
+  return 0;
+}
