@@ -69,6 +69,7 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
   std::atomic<int> next_camera{0};
   std::atomic<bool> failed{false};
   std::exception_ptr error;
+  std::vector<std::vector<std::string>> warnings(num_cameras);  // per camera, reported in camera order
   auto worker = [&]() {
     try {
       for (int c = next_camera++; c < num_cameras && !failed; c = next_camera++) {
@@ -93,8 +94,7 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
           }
           ReportProgress(progress, "silhouettes", ++done, todo, camera.name + " frame " + std::to_string(frame));
         }
-        std::lock_guard<std::mutex> lock(mutex);
-        for (const std::string& warning : extractor.info().warnings) report.notes.push_back(camera.name + ": " + warning);
+        warnings[c] = extractor.info().warnings;
       }
     } catch (...) {
       std::lock_guard<std::mutex> lock(mutex);
@@ -107,6 +107,8 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
   worker();
   for (std::thread& thread : pool) thread.join();
   if (error) std::rethrow_exception(error);
+  for (int c = 0; c < num_cameras; ++c)
+    for (const std::string& warning : warnings[c]) report.notes.push_back(capture.rig().cameras[c].name + ": " + warning);
   report.computed = inputs.frames.end - frames_done;
   report.seconds = NowSeconds() - start;
   timings->Save();
