@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include "calib/opencv_storage.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 
@@ -25,14 +26,7 @@ void OpenYaml(const std::string& path, YamlFile* file) {
   file->path = path;
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) throw InputError(path, "file not found");
-  try {
-    file->storage.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& exception) {
-    throw InputError(path, "cannot parse YAML: " + exception.err);
-  } catch (const std::exception& exception) {  // OpenCV's parser also lets std::length_error through
-    throw InputError(path, std::string("cannot parse YAML: ") + exception.what());
-  }
-  if (!file->storage.isOpened()) throw InputError(path, "cannot open as OpenCV YAML");
+  OpenFileStorage(path, "OpenCV YAML", &file->storage);
 }
 
 std::string NodeText(const cv::FileNode& node) {

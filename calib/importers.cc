@@ -18,6 +18,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "calib/easymocap_io.h"
+#include "calib/opencv_storage.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 
@@ -607,25 +608,18 @@ bool ReadCvMatrix(const cv::FileNode& node, const std::string& path, const std::
 // True when the file holds a camera matrix and extrinsics.
 bool HasCvExtrinsics(const std::string& path) {
   try {
-    cv::FileStorage storage(path, cv::FileStorage::READ);
-    if (!storage.isOpened()) return false;
+    cv::FileStorage storage;
+    OpenFileStorage(path, "OpenCV XML/YAML", &storage);
     return !FirstNode(storage, {"CameraMatrix", "camera_matrix", "K"}).isNone() &&
            !FirstNode(storage, {"rvec", "Rotation", "R", "rotation"}).isNone();
-  } catch (const std::exception&) {  // cv::Exception, or std::length_error from OpenCV's parser
+  } catch (const std::exception&) {  // InputError, or cv::Exception from a lookup
     return false;
   }
 }
 
 Camera ReadOpenCvCamera(const std::string& path, const std::string& name, const ImportOptions& options) {
   cv::FileStorage storage;
-  try {
-    storage.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& exception) {
-    throw InputError(path, "cannot parse OpenCV XML/YAML: " + exception.err);
-  } catch (const std::exception& exception) {  // OpenCV's parser also lets std::length_error through
-    throw InputError(path, std::string("cannot parse OpenCV XML/YAML: ") + exception.what());
-  }
-  if (!storage.isOpened()) throw InputError(path, "cannot open as OpenCV XML/YAML");
+  OpenFileStorage(path, "OpenCV XML/YAML", &storage);
   Camera camera;
   camera.name = SanitizeName(name);
   const std::string where = "camera " + camera.name;

@@ -1,0 +1,30 @@
+#include "calib/opencv_storage.h"
+
+#include <exception>
+
+#include <opencv2/core.hpp>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace confluent {
+
+void OpenFileStorage(const std::string& path, const std::string& format_name, cv::FileStorage* storage) {
+  const std::string text = ReadTextFile(path);
+  // OpenCV 4.6's XML parser dereferences a null pointer when the file ends after "name="
+  // (it skips the spaces to the end and reads the quote there). No XML document ends with '='.
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  const std::size_t last = text.find_last_not_of(" \t\r\n");
+  if (first != std::string::npos && text[first] == '<' && text[last] == '=')
+    throw InputError(path, "cannot parse " + format_name + ": the file ends inside a tag (truncated?)");
+  try {
+    storage->open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& exception) {
+    throw InputError(path, "cannot parse " + format_name + ": " + exception.err);
+  } catch (const std::exception& exception) {  // OpenCV's parser lets std::length_error through
+    throw InputError(path, "cannot parse " + format_name + ": " + exception.what());
+  }
+  if (!storage->isOpened()) throw InputError(path, "cannot open as " + format_name);
+}
+
+}  // namespace confluent

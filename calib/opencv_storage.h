@@ -1,0 +1,18 @@
+#pragma once
+// Opening OpenCV FileStorage files (YAML, XML, JSON) for reading, with the checks that OpenCV
+// itself lacks. Used by the EasyMocap reader and the OpenCV XML importer.
+
+#include <string>
+
+#include <opencv2/core/persistence.hpp>
+
+namespace confluent {
+
+// Opens `path` for reading into `storage`. `format_name` ("YAML", "OpenCV XML/YAML") words the
+// errors. Throws InputError naming the file when it is missing or unreadable, when OpenCV's
+// parser rejects it (cv::Exception, or the std::length_error it lets through), and for the
+// malformed XML that crashes OpenCV 4.6's parser instead (a file that ends right after an
+// attribute's '=', found by fuzzing).
+void OpenFileStorage(const std::string& path, const std::string& format_name, cv::FileStorage* storage);
+
+}  // namespace confluent
