@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.h"
+#include "app/run_json.h"
 #include "app/run_stages.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -51,16 +52,11 @@ void RecordRun(const RunInputs& inputs, const ParsedArgs& args, const nlohmann::
                const std::vector<std::string>& excluded_names) {
   const std::string path = inputs.folder.Path("run.json");
   if (fs::exists(path)) {
-    nlohmann::json previous;
-    try {
-      previous = nlohmann::json::parse(ReadTextFile(path));
-    } catch (const nlohmann::json::exception& e) {
-      throw InputError(path, std::string("not a run.json: ") + e.what());
-    }
-    if (previous.value("input_checksums", nlohmann::json()) != checksums)
+    const RunRecord previous = ReadRunRecord(path);
+    if (previous.input_checksums != checksums)
       throw InputError(path, "this run folder was made from other inputs (calibration, scan or correspondences differ); "
                              "use a new --out folder");
-    if (previous.value("excluded_cameras", std::vector<std::string>{}) != excluded_names)
+    if (previous.excluded_cameras != excluded_names)
       throw InputError(path, "this run folder was made with other --exclude-camera names; use a new --out folder");
     return;
   }
