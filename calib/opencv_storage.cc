@@ -25,6 +25,11 @@ void OpenFileStorage(const std::string& path, const std::string& format_name, cv
     throw InputError(path, "cannot parse " + format_name + ": " + exception.what());
   }
   if (!storage->isOpened()) throw InputError(path, "cannot open as " + format_name);
+  // Callers look entries up by name, which OpenCV asserts on (cv::Exception) unless the top
+  // level is a map; an empty file has no top-level node and simply lacks the entries.
+  const cv::FileNode top = storage->root();
+  if (!top.isMap() && !top.isNone())
+    throw InputError(path, "cannot read " + format_name + ": the top level is not a map of named entries");
 }
 
 }  // namespace confluent

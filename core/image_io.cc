@@ -3,7 +3,12 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <vector>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -12,7 +17,7 @@ namespace confluent {
 namespace {
 
 // ReadImage refuses images whose pixels would need more memory than this.
-constexpr std::size_t kMaxImageBytes = std::size_t{1} << 30;
+constexpr std::size_t kMaxImageBytes = std::size_t{1} << 29;
 
 OIIO::TypeDesc OiioType(PixelType type) {
   switch (type) {
@@ -23,9 +28,56 @@ OIIO::TypeDesc OiioType(PixelType type) {
   return OIIO::TypeDesc::UINT8;
 }
 
+// OpenEXR 3.1 believes the sizes of header attributes: a corrupt one makes it allocate up to
+// 2 GB before reading a byte of it (found by fuzzing). Walks the attribute list of an .exr file
+// (every header of a multi-part file; magic 76 2f 31 01) and throws InputError when an attribute
+// claims more bytes than the file holds. Other files are left to OpenImageIO.
+void CheckExrHeader(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  char magic[4] = {};
+  if (!file.read(magic, 4) || std::memcmp(magic, "\x76\x2f\x31\x01", 4) != 0) return;
+  file.seekg(0, std::ios::end);
+  const std::streamoff size = file.tellg();
+  // Headers are small: the first 16 MiB hold any real one.
+  file.seekg(0);
+  std::vector<char> bytes(static_cast<std::size_t>(std::min<std::streamoff>(size, std::streamoff{1} << 24)));
+  file.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  const std::size_t end = static_cast<std::size_t>(file.gcount());
+  std::size_t at = 8;  // magic and version
+  if (end < at) throw InputError(path, "truncated EXR header");
+  const bool multi_part = (static_cast<unsigned char>(bytes[5]) & 0x10) != 0;  // version bit 12
+  auto read_name = [&](std::string* name) {
+    const std::size_t stop = std::min(end, at + 256);
+    const std::size_t nul = static_cast<std::size_t>(std::find(bytes.begin() + at, bytes.begin() + stop, '\0') - bytes.begin());
+    if (nul >= stop) throw InputError(path, "corrupt EXR header (attribute name not terminated)");
+    name->assign(bytes.data() + at, nul - at);
+    at = nul + 1;
+  };
+  for (;;) {  // each header: attributes (name, type, int32 size, value) up to an empty name
+    std::string name, type;
+    read_name(&name);
+    if (name.empty()) break;  // an empty header ends the list of a multi-part file
+    while (!name.empty()) {
+      read_name(&type);
+      if (end - at < 4) throw InputError(path, "truncated EXR header");
+      std::int32_t value_size = 0;
+      std::memcpy(&value_size, bytes.data() + at, 4);  // little-endian, as EXR
+      at += 4;
+      if (value_size < 0 || static_cast<std::streamoff>(at) + value_size > size)
+        throw InputError(path, "corrupt EXR header: attribute '" + name + "' claims " + std::to_string(value_size) +
+                                   " bytes, more than the file holds");
+      if (static_cast<std::size_t>(value_size) > end - at) return;  // past the first 16 MiB: left to OpenEXR
+      at += static_cast<std::size_t>(value_size);
+      read_name(&name);
+    }
+    if (!multi_part) break;
+  }
+}
+
 std::unique_ptr<OIIO::ImageInput> OpenInput(const std::string& path) {
   std::error_code error;
   if (!std::filesystem::exists(path, error)) throw InputError(path, "no such file");
+  CheckExrHeader(path);
   // Keep alpha as stored (no premultiplication), so RGBA files round-trip exactly.
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
@@ -47,12 +99,12 @@ Image ReadImage(const std::string& path) {
   PixelType type = PixelType::kFloat32;
   if (spec.format == OIIO::TypeDesc::UINT8) type = PixelType::kUInt8;
   else if (spec.format == OIIO::TypeDesc::UINT16) type = PixelType::kUInt16;
-  // The header's size is believed only up to 1 GiB of pixels (an 8K RGBA float image): a
+  // The header's size is believed only up to 512 MiB of pixels (8K RGBA at 16 bits): a
   // corrupt or hostile header must not make us allocate without bound.
   const double bytes = static_cast<double>(spec.width) * spec.height * spec.nchannels * BytesPerChannel(type);
   if (bytes > static_cast<double>(kMaxImageBytes))
     throw InputError(path, "image too large: " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " with " +
-                               std::to_string(spec.nchannels) + " channels needs more than 1 GiB (corrupt header?)");
+                               std::to_string(spec.nchannels) + " channels needs more than 512 MiB (corrupt header?)");
   Image image(spec.width, spec.height, spec.nchannels, type);
   const bool ok = input->read_image(0, 0, 0, spec.nchannels, OiioType(type), image.data.data());
   std::string message = input->geterror();

@@ -9,7 +9,7 @@ namespace confluent {
 
 // Reads an image file with all its channels in their stored type (8-bit, 16-bit or float;
 // other types become float). Throws InputError naming the file when it is missing,
-// truncated, not an image, or larger than 1 GiB of pixels (a corrupt header).
+// truncated, not an image, or larger than 512 MiB of pixels (a corrupt header).
 Image ReadImage(const std::string& path);
 
 // Reads only the header: width, height and channels. Throws InputError like ReadImage.
