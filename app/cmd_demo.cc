@@ -9,7 +9,7 @@
 #include "calib/rig_check.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "render/studio_presets.h"
+#include "studio/presets.h"
 
 namespace confluent::app {
 namespace fs = std::filesystem;

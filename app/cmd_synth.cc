@@ -1,5 +1,5 @@
 // confluent synth: render a synthetic multi-camera capture of an actor in the studio, with
-// ground truth (render/studio_synth.h).
+// ground truth (studio/synth.h).
 
 #include <cstdio>
 #include <string>
@@ -7,7 +7,7 @@
 #include "app/commands.h"
 #include "core/error.h"
 #include "core/bvh_retarget.h"
-#include "render/studio_presets.h"
+#include "studio/presets.h"
 
 namespace confluent::app {
 namespace {

@@ -6,7 +6,7 @@
 //
 // Frame and units: world Z up, metres. At rest the template stands at the origin in an A-pose
 // (upper arms 40 degrees from the vertical), facing +y; its left side is -x. The joints carry
-// the studio skeleton's names (render/studio_actor.h StudioJointNames), so joint errors against
+// the studio skeleton's names (studio/actor.h StudioJointNames), so joint errors against
 // the studio ground truth compare joints of the same name (see JointMappingNote()).
 
 #include <Eigen/Core>

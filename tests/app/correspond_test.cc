@@ -13,7 +13,7 @@
 #include "core/mesh_io.h"
 #include "core/mesh_ops.h"
 #include "deform/correspondences.h"
-#include "render/studio_actor.h"
+#include "studio/actor.h"
 #include "tracking/body_template.h"
 #include "tracking/motion_io.h"
 #include "tests/support/test_support.h"

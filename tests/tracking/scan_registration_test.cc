@@ -14,7 +14,7 @@
 #include "core/error.h"
 #include "core/mesh_ops.h"
 #include "deform/correspondence_placement.h"
-#include "render/studio_actor.h"
+#include "studio/actor.h"
 #include "tests/support/test_support.h"
 #include "tracking/pose_from_joints.h"
 

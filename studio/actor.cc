@@ -1,4 +1,4 @@
-#include "render/studio_actor.h"
+#include "studio/actor.h"
 
 #include <algorithm>
 #include <cmath>

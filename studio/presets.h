@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "render/studio_synth.h"
+#include "studio/synth.h"
 
 namespace confluent {
 

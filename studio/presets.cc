@@ -1,4 +1,4 @@
-#include "render/studio_presets.h"
+#include "studio/presets.h"
 
 #include "core/error.h"
 

@@ -1,4 +1,4 @@
-#include "render/studio_skin_io.h"
+#include "studio/skin_io.h"
 
 #include <cmath>
 #include <cstdio>

@@ -5,8 +5,8 @@
 #include <fstream>
 
 #include "core/error.h"
-#include "render/studio_actor.h"
-#include "render/studio_motion.h"
+#include "studio/actor.h"
+#include "studio/motion.h"
 #include "tests/support/bvh_fixture.h"
 #include "tests/support/test_support.h"
 

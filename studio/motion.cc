@@ -1,4 +1,4 @@
-#include "render/studio_motion.h"
+#include "studio/motion.h"
 
 #include <algorithm>
 #include <cmath>

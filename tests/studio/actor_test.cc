@@ -7,8 +7,8 @@
 #include "core/error.h"
 #include "core/mesh_validation.h"
 #include "core/skinning.h"
-#include "render/studio_actor.h"
-#include "render/studio_motion.h"
+#include "studio/actor.h"
+#include "studio/motion.h"
 
 namespace confluent {
 namespace {

@@ -15,7 +15,7 @@
 
 #include <string>
 
-#include "render/studio_actor.h"
+#include "studio/actor.h"
 
 namespace confluent {
 

@@ -1,4 +1,4 @@
-#include "render/studio_scene.h"
+#include "studio/scene.h"
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,7 @@
 //                  images/<cam>/000000.png ..., background/<cam>.png (clean plates), scan.ply.
 // Ground truth:    masks/<cam>/000000.png (0/255), meshes/000000.ply (posed actor, same
 //                  topology as scan.ply), scan.ply (rest mesh with colours and segment labels),
-//                  skeleton.json, skin.json (skeleton and skinning weights, render/studio_skin_io.h),
+//                  skeleton.json, skin.json (skeleton and skinning weights, studio/skin_io.h),
 //                  joints.json (per-frame joint positions and rotations; skinned actors only:
 //                  the procedural one or a rigged mesh), cameras (intri.yml, extri.yml),
 //                  synth.json (options).
@@ -15,10 +15,10 @@
 
 #include "core/progress.h"
 #include "core/skinning.h"
-#include "render/studio_actor.h"
-#include "render/studio_motion.h"
-#include "render/studio_rig.h"
-#include "render/studio_scene.h"
+#include "studio/actor.h"
+#include "studio/motion.h"
+#include "studio/rig.h"
+#include "studio/scene.h"
 
 namespace confluent {
 
@@ -38,7 +38,7 @@ struct StudioSynthOptions {
   // the floor. Meshes without colours get procedural ones.
   std::string actor_sequence_dir;
   // Instead of the procedural actor: a rigged mesh (rest pose, world Z up, metres, facing +y)
-  // and its skeleton and skinning weights (render/studio_skin_io.h), performing the motion.
+  // and its skeleton and skinning weights (studio/skin_io.h), performing the motion.
   std::string actor_mesh_path;
   std::string actor_skin_path;
   char sequence_up_axis = 'z';

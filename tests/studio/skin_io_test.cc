@@ -1,4 +1,4 @@
-// Rigged actors for the studio (render/studio_skin_io.h): skin.json round trip, and bad input.
+// Rigged actors for the studio (studio/skin_io.h): skin.json round trip, and bad input.
 
 #include <gtest/gtest.h>
 
@@ -7,9 +7,9 @@
 #include "core/error.h"
 #include "core/mesh_io.h"
 #include "core/skinning.h"
-#include "render/studio_actor.h"
-#include "render/studio_motion.h"
-#include "render/studio_skin_io.h"
+#include "studio/actor.h"
+#include "studio/motion.h"
+#include "studio/skin_io.h"
 #include "tests/support/test_support.h"
 
 namespace confluent {

@@ -11,8 +11,8 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"
-#include "render/studio_presets.h"
-#include "render/studio_synth.h"
+#include "studio/presets.h"
+#include "studio/synth.h"
 #include "tests/support/test_support.h"
 
 namespace confluent {

@@ -1,4 +1,4 @@
-#include "render/studio_synth.h"
+#include "studio/synth.h"
 
 #include <algorithm>
 #include <chrono>
@@ -21,7 +21,7 @@
 #include "core/image_io.h"
 #include "core/mesh_io.h"
 #include "render/renderer.h"
-#include "render/studio_skin_io.h"
+#include "studio/skin_io.h"
 
 namespace confluent {
 namespace {

@@ -1,4 +1,4 @@
-#include "render/studio_rig.h"
+#include "studio/rig.h"
 
 #include <cmath>
 #include <cstdio>
