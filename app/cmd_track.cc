@@ -17,8 +17,8 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"
+#include "silhouette/overlap.h"
 #include "tracking/motion_io.h"
-#include "tracking/overlap.h"
 #include "tracking/tracker.h"
 
 namespace confluent::app {

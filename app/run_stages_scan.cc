@@ -14,11 +14,11 @@
 #include "deform/confluent_motion.h"
 #include "deform/correspondence_placement.h"
 #include "deform/correspondences.h"
+#include "refine/photo_refinement.h"
+#include "refine/silhouette_refinement.h"
 #include "render/camera_path.h"
 #include "render/projective_texture.h"
-#include "tracking/photo_refinement.h"
 #include "tracking/scan_registration.h"
-#include "tracking/silhouette_refinement.h"
 
 namespace confluent::app {
 namespace fs = std::filesystem;

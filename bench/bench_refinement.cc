@@ -9,10 +9,10 @@
 #include <cmath>
 
 #include "core/mesh_ops.h"
+#include "refine/photo_refinement.h"
+#include "refine/silhouette_refinement.h"
 #include "render/renderer.h"
-#include "tracking/overlap.h"
-#include "tracking/photo_refinement.h"
-#include "tracking/silhouette_refinement.h"
+#include "silhouette/overlap.h"
 
 namespace confluent {
 namespace {

@@ -14,7 +14,7 @@
 
 #include "calib/capture.h"
 #include "core/image_io.h"
-#include "tracking/overlap.h"
+#include "silhouette/overlap.h"
 #include "tracking/tracker.h"
 
 namespace confluent {

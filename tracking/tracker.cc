@@ -13,7 +13,7 @@
 #include "calib/camera.h"
 #include "calib/rig_check.h"
 #include "core/error.h"
-#include "tracking/overlap.h"
+#include "silhouette/overlap.h"
 
 namespace confluent {
 namespace {

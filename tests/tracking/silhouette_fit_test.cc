@@ -6,7 +6,7 @@
 #include <random>
 
 #include "calib/rig_check.h"
-#include "tracking/overlap.h"
+#include "silhouette/overlap.h"
 #include "tracking/tracker.h"
 
 namespace confluent {

@@ -8,9 +8,9 @@
 
 #include "calib/rig_check.h"
 #include "core/error.h"
+#include "silhouette/overlap.h"
 #include "tests/support/test_support.h"
 #include "tracking/motion_io.h"
-#include "tracking/overlap.h"
 #include "tracking/silhouette_fit.h"
 #include "tracking/tracker.h"
 

@@ -1,4 +1,4 @@
-#include "deform/normalised_diffusion.h"
+#include "refine/normalised_diffusion.h"
 
 #include <Eigen/SparseCore>
 #include <cstdlib>

@@ -1,10 +1,10 @@
-// Normalised diffusion over a mesh (deform/normalised_diffusion.h).
+// Normalised diffusion over a mesh (refine/normalised_diffusion.h).
 
 #include <gtest/gtest.h>
 
 #include "core/error.h"
 #include "core/mesh_ops.h"
-#include "deform/normalised_diffusion.h"
+#include "refine/normalised_diffusion.h"
 
 namespace confluent {
 namespace {

@@ -1,4 +1,4 @@
-#include "tracking/silhouette_refinement.h"
+#include "refine/silhouette_refinement.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -9,8 +9,8 @@
 #include "core/error.h"
 #include "core/mesh_ops.h"
 #include "core/mesh_validation.h"
-#include "deform/normalised_diffusion.h"
-#include "tracking/overlap.h"
+#include "refine/normalised_diffusion.h"
+#include "silhouette/overlap.h"
 
 namespace confluent {
 

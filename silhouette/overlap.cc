@@ -1,4 +1,4 @@
-#include "tracking/overlap.h"
+#include "silhouette/overlap.h"
 
 #include <algorithm>
 #include <cmath>

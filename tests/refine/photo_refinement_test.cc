@@ -1,4 +1,4 @@
-// Photo-consistency refinement (tracking/photo_refinement.h): a textured sphere seen by a ring of
+// Photo-consistency refinement (refine/photo_refinement.h): a textured sphere seen by a ring of
 // cameras, and a start whose surface bulges out by a few millimetres where the silhouettes cannot
 // tell (facing the cameras). The refinement must flatten the bulge from the images alone.
 
@@ -8,8 +8,8 @@
 
 #include "calib/camera.h"
 #include "core/mesh_ops.h"
+#include "refine/photo_refinement.h"
 #include "render/renderer.h"
-#include "tracking/photo_refinement.h"
 
 namespace confluent {
 namespace {

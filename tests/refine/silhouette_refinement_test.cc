@@ -1,4 +1,4 @@
-// Silhouette refinement (tracking/silhouette_refinement.h): a sphere that is too small and off
+// Silhouette refinement (refine/silhouette_refinement.h): a sphere that is too small and off
 // centre is pulled onto the silhouettes of the true sphere, seen by a ring of cameras.
 
 #include <gtest/gtest.h>
@@ -7,8 +7,8 @@
 
 #include "calib/rig_check.h"
 #include "core/mesh_ops.h"
-#include "tracking/overlap.h"
-#include "tracking/silhouette_refinement.h"
+#include "refine/silhouette_refinement.h"
+#include "silhouette/overlap.h"
 
 namespace confluent {
 namespace {

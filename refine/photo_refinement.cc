@@ -1,4 +1,4 @@
-#include "tracking/photo_refinement.h"
+#include "refine/photo_refinement.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +12,7 @@
 
 #include "core/error.h"
 #include "core/mesh_ops.h"
-#include "deform/normalised_diffusion.h"
+#include "refine/normalised_diffusion.h"
 #include "render/cpu_raster.h"
 
 namespace confluent {
