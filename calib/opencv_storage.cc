@@ -12,9 +12,13 @@ namespace confluent {
 void OpenFileStorage(const std::string& path, const std::string& format_name, cv::FileStorage* storage) {
   const std::string text = ReadTextFile(path);
   // OpenCV 4.6's XML parser dereferences a null pointer when the file ends after "name="
-  // (it skips the spaces to the end and reads the quote there). No XML document ends with '='.
-  const std::size_t first = text.find_first_not_of(" \t\r\n");
-  const std::size_t last = text.find_last_not_of(" \t\r\n");
+  // (it skips the spaces to the end and reads the quote there), and when a NUL byte follows
+  // the '=' (its line reader stops there). No XML document ends with '=' or holds a NUL byte.
+  const char* const kSpaces = " \t\r\n\v\f";
+  const std::size_t first = text.find_first_not_of(kSpaces);
+  const std::size_t last = text.find_last_not_of(kSpaces);
+  if (first != std::string::npos && text[first] == '<' && text.find('\0') != std::string::npos)
+    throw InputError(path, "cannot parse " + format_name + ": XML with a NUL byte (not a text file)");
   if (first != std::string::npos && text[first] == '<' && text[last] == '=')
     throw InputError(path, "cannot parse " + format_name + ": the file ends inside a tag (truncated?)");
   try {
