@@ -13,8 +13,7 @@ namespace confluent {
 // parser rejects it (cv::Exception, or the std::length_error it lets through), and for the
 // malformed XML that crashes OpenCV 4.6's parser instead (a file that ends right after an
 // attribute's '=', or XML holding a NUL byte; found by fuzzing), or when the top level is not
-// a map (OpenCV's lookup by
-// name would throw cv::Exception).
+// a map (OpenCV's lookup by name would throw cv::Exception).
 void OpenFileStorage(const std::string& path, const std::string& format_name, cv::FileStorage* storage);
 
 }  // namespace confluent
