@@ -20,19 +20,26 @@
 
 namespace confluent::fuzz {
 
-// A folder of its own under $TMPDIR (or /tmp), removed when the process exits normally.
+// A folder of its own, $TMPDIR (or /tmp)/confluent-fuzz-<pid>-XXXXXX. libFuzzer ends with
+// _Exit, so the folder outlives the process: each new process first removes the folders of
+// processes that are gone.
 inline const std::filesystem::path& ScratchDir() {
   static const std::filesystem::path dir = [] {
     const char* tmp = std::getenv("TMPDIR");
-    std::string pattern = std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") + "/confluent-fuzz-XXXXXX";
+    const std::filesystem::path base = tmp != nullptr && *tmp != '\0' ? tmp : "/tmp";
+    std::error_code error;
+    for (const auto& entry : std::filesystem::directory_iterator(base, error)) {
+      const std::string name = entry.path().filename().string();
+      if (name.rfind("confluent-fuzz-", 0) != 0) continue;
+      const long pid = std::atol(name.c_str() + 15);
+      if (pid > 0 && !std::filesystem::exists("/proc/" + std::to_string(pid), error))
+        std::filesystem::remove_all(entry.path(), error);
+    }
+    std::string pattern = (base / ("confluent-fuzz-" + std::to_string(getpid()) + "-XXXXXX")).string();
     if (mkdtemp(pattern.data()) == nullptr) {
       std::perror("confluent fuzz: mkdtemp");
       std::abort();
     }
-    std::atexit([] {
-      std::error_code error;
-      std::filesystem::remove_all(ScratchDir(), error);
-    });
     return std::filesystem::path(pattern);
   }();
   return dir;
