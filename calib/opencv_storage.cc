@@ -8,6 +8,24 @@
 #include "core/error.h"
 
 namespace confluent {
+namespace {
+
+// Whether some line of a YAML text starts, after its indentation, with the ':' of a key-value
+// pair whose key is empty.
+bool HasEntryWithoutName(const std::string& text) {
+  std::size_t line_start = 0;
+  while (line_start < text.size()) {
+    const std::size_t content = text.find_first_not_of(" \t", line_start);
+    if (content == std::string::npos) return false;
+    if (text[content] == ':') return true;
+    const std::size_t end = text.find('\n', content);
+    if (end == std::string::npos) return false;
+    line_start = end + 1;
+  }
+  return false;
+}
+
+}  // namespace
 
 void OpenFileStorage(const std::string& path, const std::string& format_name, cv::FileStorage* storage) {
   const std::string text = ReadTextFile(path);
@@ -21,6 +39,10 @@ void OpenFileStorage(const std::string& path, const std::string& format_name, cv
     throw InputError(path, "cannot parse " + format_name + ": XML with a NUL byte (not a text file)");
   if (first != std::string::npos && text[first] == '<' && text[last] == '=')
     throw InputError(path, "cannot parse " + format_name + ": the file ends inside a tag (truncated?)");
+  // OpenCV 4.6's YAML parser loops for ever on a map entry without a name (a line "  : 1"
+  // inside a nested map; found by fuzzing). OpenCV never writes such an entry.
+  if (first != std::string::npos && text[first] != '<' && text[first] != '{' && HasEntryWithoutName(text))
+    throw InputError(path, "cannot parse " + format_name + ": an entry without a name (a line starting with ':')");
   try {
     storage->open(path, cv::FileStorage::READ);
   } catch (const cv::Exception& exception) {
