@@ -791,6 +791,8 @@ struct ProjectiveTexturer::Impl {
       source[i] = 2;
       context.MakeCurrent();
     };
+    // Declared before the jobs: the workers use it until the jobs are joined below.
+    std::atomic<int> next{0};
     std::vector<std::future<void>> jobs;
     try {
       if (cpu_raster) {
@@ -800,7 +802,6 @@ struct ProjectiveTexturer::Impl {
         const int workers = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, std::min(n, 8));
         raster_frames.resize(std::max<std::size_t>(raster_frames.size(), std::max(workers, 1)));
         feather_scratch.resize(std::max<std::size_t>(feather_scratch.size(), std::max(workers, 1)));
-        std::atomic<int> next{0};
         auto work = [&](int worker) {
           for (int i = next++; i < n; i = next++) process(i, &raster_frames[worker], &feather_scratch[worker]);
         };
