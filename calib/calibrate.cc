@@ -1,9 +1,9 @@
-// Multi-camera checkerboard calibration. The Ceres cost functor (autodiff) lives only in this
-// translation unit.
+// Multi-camera checkerboard calibration: CalibrateRig chains per-camera intrinsics
+// (calibrate_intrinsics.cc), pairwise extrinsic consensus (calibrate_extrinsics.cc) and the joint
+// adjustment (bundle_adjustment.cc); board detection over image folders and videos.
 
 #include "calib/calibrate.h"
 
-#include <ceres/ceres.h>
 #include <ceres/rotation.h>
 
 #include <Eigen/SVD>
@@ -14,10 +14,9 @@
 #include <filesystem>
 #include <limits>
 #include <map>
-#include <numeric>
-#include <opencv2/calib3d.hpp>
 #include <set>
 
+#include "calib/calibrate_internal.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/video.h"
@@ -40,52 +39,10 @@ void CalibrateOptions::Check() const {
   if (num_threads < 1) fail("num_threads must be >= 1");
 }
 
-namespace {
-
-constexpr double kDeg = M_PI / 180.0;
-
-// ---------------------------------------------------------------------------------------------
-// Projection model shared by the adjustment and the error reports.
-// intrinsics: fx fy cx cy k1 k2 p1 p2 k3. pose blocks: angle-axis (3) + translation (3).
-
-template <typename T>
-void ProjectBoardPoint(const T* intrinsics, const T* cam_from_world, const T* world_from_board, const T* point_in_board,
-                       T* pixel) {
-  T point_in_world[3];
-  ceres::AngleAxisRotatePoint(world_from_board, point_in_board, point_in_world);
-  for (int i = 0; i < 3; ++i) point_in_world[i] += world_from_board[3 + i];
-  T p[3];
-  ceres::AngleAxisRotatePoint(cam_from_world, point_in_world, p);
-  for (int i = 0; i < 3; ++i) p[i] += cam_from_world[3 + i];
-  const T x = p[0] / p[2], y = p[1] / p[2];
-  const T r2 = x * x + y * y;
-  const T radial = T(1) + r2 * (intrinsics[4] + r2 * (intrinsics[5] + r2 * intrinsics[8]));
-  const T xd = x * radial + T(2) * intrinsics[6] * x * y + intrinsics[7] * (r2 + T(2) * x * x);
-  const T yd = y * radial + intrinsics[6] * (r2 + T(2) * y * y) + T(2) * intrinsics[7] * x * y;
-  pixel[0] = intrinsics[0] * xd + intrinsics[2];
-  pixel[1] = intrinsics[1] * yd + intrinsics[3];
-}
-
-struct CornerResidual {
-  CornerResidual(const Eigen::Vector3d& point_in_board, const Eigen::Vector2d& observed_px)
-      : point_(point_in_board), observed_(observed_px) {}
-  template <typename T>
-  bool operator()(const T* intrinsics, const T* cam_from_world, const T* world_from_board, T* residual) const {
-    const T point[3] = {T(point_.x()), T(point_.y()), T(point_.z())};
-    T pixel[2];
-    ProjectBoardPoint(intrinsics, cam_from_world, world_from_board, point, pixel);
-    residual[0] = pixel[0] - T(observed_.x());
-    residual[1] = pixel[1] - T(observed_.y());
-    return true;
-  }
-  Eigen::Vector3d point_;
-  Eigen::Vector2d observed_;
-};
+namespace calibrate_internal {
 
 // ---------------------------------------------------------------------------------------------
 // Small pose helpers.
-
-using Pose = Eigen::Isometry3d;
 
 void PoseToBlock(const Pose& pose, double* block) {
   const Eigen::Matrix3d rotation = pose.linear();
@@ -143,376 +100,9 @@ double Median(std::vector<double> values) {
   return values[mid];
 }
 
-// ---------------------------------------------------------------------------------------------
-// Working state.
+}  // namespace calibrate_internal
 
-struct ViewState {
-  int frame = 0;
-  std::vector<Eigen::Vector2d> corners;
-  Pose cam_from_board = Pose::Identity();
-  bool has_pose = false;
-  bool rejected = false;
-  bool selected_for_intrinsics = false;
-};
-
-struct CameraState {
-  std::string name;
-  int width = 0, height = 0;
-  double intrinsics[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  bool has_intrinsics = false;
-  bool known_intrinsics = false;
-  bool reduced_model = false;
-  std::vector<ViewState> views;
-  std::map<int, int> view_of_frame;  // frame -> index into views (usable views only)
-  Pose world_from_cam = Pose::Identity();
-  bool placed = false;
-  int depth = 0;  // in the spanning tree
-};
-
-cv::Mat CvCameraMatrix(const double* intrinsics) {
-  cv::Mat k = cv::Mat::eye(3, 3, CV_64F);
-  k.at<double>(0, 0) = intrinsics[0];
-  k.at<double>(1, 1) = intrinsics[1];
-  k.at<double>(0, 2) = intrinsics[2];
-  k.at<double>(1, 2) = intrinsics[3];
-  return k;
-}
-
-cv::Mat CvDist(const double* intrinsics) {
-  cv::Mat d(1, 5, CV_64F);
-  for (int i = 0; i < 5; ++i) d.at<double>(0, i) = intrinsics[4 + i];
-  return d;
-}
-
-Pose PoseFromCv(const cv::Mat& rvec, const cv::Mat& tvec) {
-  double block[6];
-  for (int i = 0; i < 3; ++i) {
-    block[i] = rvec.at<double>(i);
-    block[3 + i] = tvec.at<double>(i);
-  }
-  return BlockToPose(block);
-}
-
-// RMS reprojection error (pixels) of one view given intrinsics and cam_from_board.
-double ViewRms(const CheckerboardSpec& board, const double* intrinsics, const Pose& cam_from_board,
-               const std::vector<Eigen::Vector2d>& corners) {
-  double cam_block[6], board_block[6] = {0, 0, 0, 0, 0, 0};
-  PoseToBlock(cam_from_board, cam_block);
-  const std::vector<Eigen::Vector3d> points = board.CornersInBoard();
-  double sum = 0.0;
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    double pixel[2];
-    ProjectBoardPoint(intrinsics, cam_block, board_block, points[k].data(), pixel);
-    sum += (Eigen::Vector2d(pixel[0], pixel[1]) - corners[k]).squaredNorm();
-  }
-  return std::sqrt(sum / points.size());
-}
-
-// Board pose by PnP (IPPE, then Levenberg-Marquardt refinement).
-bool SolveViewPose(const CheckerboardSpec& board, const double* intrinsics, ViewState* view) {
-  const std::vector<cv::Point3f> object = CvBoardPoints(board);
-  const std::vector<cv::Point2f> image = CvPixels(view->corners);
-  const cv::Mat k = CvCameraMatrix(intrinsics), dist = CvDist(intrinsics);
-  cv::Mat rvec, tvec;
-  if (!cv::solvePnP(object, image, k, dist, rvec, tvec, false, cv::SOLVEPNP_IPPE)) return false;
-  cv::solvePnPRefineLM(object, image, k, dist, rvec, tvec);
-  view->cam_from_board = PoseFromCv(rvec, tvec);
-  view->has_pose = view->cam_from_board.translation().z() > 0.0;
-  return view->has_pose;
-}
-
-// RMS distance between the corners of two views, pixels.
-double ViewDistance(const ViewState& a, const ViewState& b) {
-  double sum = 0.0;
-  for (std::size_t k = 0; k < a.corners.size(); ++k) sum += (a.corners[k] - b.corners[k]).squaredNorm();
-  return std::sqrt(sum / a.corners.size());
-}
-
-// Farthest-point selection of distinct views (at least `distinct_px` apart), starting from the
-// view whose corners span the largest area; at most `max_views`.
-std::vector<int> SelectViews(const std::vector<ViewState>& views, int max_views, double distinct_px) {
-  std::vector<int> selected;
-  if (views.empty()) return selected;
-  int first = 0;
-  double best_area = -1.0;
-  for (int i = 0; i < static_cast<int>(views.size()); ++i) {
-    Eigen::Vector2d lo = views[i].corners[0], hi = lo;
-    for (const auto& c : views[i].corners) {
-      lo = lo.cwiseMin(c);
-      hi = hi.cwiseMax(c);
-    }
-    const double area = (hi - lo).prod();
-    if (area > best_area) {
-      best_area = area;
-      first = i;
-    }
-  }
-  std::vector<double> min_distance(views.size(), std::numeric_limits<double>::infinity());
-  int next = first;
-  while (static_cast<int>(selected.size()) < max_views) {
-    selected.push_back(next);
-    double farthest = -1.0;
-    int candidate = -1;
-    for (int i = 0; i < static_cast<int>(views.size()); ++i) {
-      min_distance[i] = std::min(min_distance[i], ViewDistance(views[i], views[next]));
-      if (min_distance[i] > farthest) {
-        farthest = min_distance[i];
-        candidate = i;
-      }
-    }
-    if (candidate < 0 || farthest <= distinct_px) break;
-    next = candidate;
-  }
-  std::sort(selected.begin(), selected.end());
-  return selected;
-}
-
-// Per-camera calibration with OpenCV. Fills intrinsics, poses of the used views, the report.
-void CalibrateIntrinsics(const CheckerboardSpec& board, const CalibrateOptions& options, CameraState* camera,
-                         CameraCalibrationReport* report) {
-  std::vector<int> selected = SelectViews(camera->views, std::numeric_limits<int>::max(), options.distinct_view_px);
-  report->views_distinct = static_cast<int>(selected.size());
-  if (selected.empty()) return;
-  if (static_cast<int>(selected.size()) > options.max_intrinsic_views)
-    selected = SelectViews(camera->views, options.max_intrinsic_views, options.distinct_view_px);
-  camera->reduced_model = static_cast<int>(selected.size()) < options.min_views_full_model;
-
-  const std::vector<cv::Point3f> object = CvBoardPoints(board);
-  const cv::Size size(camera->width, camera->height);
-  int flags = 0;
-  cv::Mat k = cv::Mat::eye(3, 3, CV_64F), dist = cv::Mat::zeros(1, 5, CV_64F);
-  if (camera->reduced_model) {
-    std::vector<std::vector<cv::Point3f>> objects;
-    std::vector<std::vector<cv::Point2f>> images;
-    for (int i : selected) {
-      objects.push_back(object);
-      images.push_back(CvPixels(camera->views[i].corners));
-    }
-    const cv::Mat guess = cv::initCameraMatrix2D(objects, images, size);
-    const double focal = 0.5 * (guess.at<double>(0, 0) + guess.at<double>(1, 1));
-    k.at<double>(0, 0) = k.at<double>(1, 1) = focal > 0 ? focal : std::max(size.width, size.height);
-    k.at<double>(0, 2) = 0.5 * (size.width - 1);
-    k.at<double>(1, 2) = 0.5 * (size.height - 1);
-    flags = cv::CALIB_USE_INTRINSIC_GUESS | cv::CALIB_FIX_PRINCIPAL_POINT | cv::CALIB_FIX_ASPECT_RATIO |
-            cv::CALIB_ZERO_TANGENT_DIST | cv::CALIB_FIX_K2 | cv::CALIB_FIX_K3;
-  } else {
-    if (!options.estimate_k3) flags |= cv::CALIB_FIX_K3;
-    if (!options.estimate_tangential) flags |= cv::CALIB_ZERO_TANGENT_DIST;
-  }
-
-  double rms = 0.0;
-  std::vector<cv::Mat> rvecs, tvecs;
-  for (int round = 0; round < 4; ++round) {
-    std::vector<std::vector<cv::Point3f>> objects;
-    std::vector<std::vector<cv::Point2f>> images;
-    for (int i : selected) {
-      objects.push_back(object);
-      images.push_back(CvPixels(camera->views[i].corners));
-    }
-    cv::Mat std_intrinsics, std_extrinsics, per_view;
-    cv::Mat k_round = k.clone(), dist_round = dist.clone();
-    rms = cv::calibrateCamera(objects, images, size, k_round, dist_round, rvecs, tvecs, std_intrinsics, std_extrinsics,
-                              per_view, flags,
-                              cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
-    k_round.copyTo(k);
-    dist_round.reshape(1, 1).colRange(0, 5).copyTo(dist);
-    std::vector<double> errors(per_view.begin<double>(), per_view.end<double>());
-    const double threshold = std::max(options.outlier_factor * Median(errors), options.outlier_min_rms_px);
-    std::vector<int> kept;
-    for (std::size_t i = 0; i < selected.size(); ++i)
-      if (errors[i] <= threshold) kept.push_back(selected[i]);
-      else camera->views[selected[i]].rejected = true;
-    if (kept.size() == selected.size()) break;
-    const int minimum = camera->reduced_model ? 1 : 3;
-    if (static_cast<int>(kept.size()) < minimum) {  // keep the views rather than fail
-      for (int i : selected) camera->views[i].rejected = false;
-      break;
-    }
-    selected = kept;
-  }
-  camera->intrinsics[0] = k.at<double>(0, 0);
-  camera->intrinsics[1] = k.at<double>(1, 1);
-  camera->intrinsics[2] = k.at<double>(0, 2);
-  camera->intrinsics[3] = k.at<double>(1, 2);
-  for (int i = 0; i < 5; ++i) camera->intrinsics[4 + i] = dist.at<double>(0, i);
-  camera->has_intrinsics = std::isfinite(rms) && camera->intrinsics[0] > 0 && camera->intrinsics[1] > 0;
-  for (std::size_t i = 0; i < selected.size(); ++i) {
-    camera->views[selected[i]].selected_for_intrinsics = true;
-    camera->views[selected[i]].cam_from_board = PoseFromCv(rvecs[i], tvecs[i]);
-    camera->views[selected[i]].has_pose = true;
-  }
-  report->views_intrinsics = static_cast<int>(selected.size());
-  report->intrinsic_rms_px = rms;
-}
-
-// PnP for every view that has no pose yet; rejects views far worse than the typical one.
-void PoseAllViews(const CheckerboardSpec& board, const CalibrateOptions& options, CameraState* camera) {
-  std::vector<double> errors;
-  for (ViewState& view : camera->views) {
-    if (view.rejected) continue;
-    if (!view.has_pose && !SolveViewPose(board, camera->intrinsics, &view)) {
-      view.rejected = true;
-      continue;
-    }
-    errors.push_back(ViewRms(board, camera->intrinsics, view.cam_from_board, view.corners));
-  }
-  const double threshold = std::max(options.outlier_factor * Median(errors), options.outlier_min_rms_px);
-  for (ViewState& view : camera->views)
-    if (!view.rejected && ViewRms(board, camera->intrinsics, view.cam_from_board, view.corners) > threshold)
-      view.rejected = true;
-  camera->view_of_frame.clear();
-  for (int i = 0; i < static_cast<int>(camera->views.size()); ++i)
-    if (!camera->views[i].rejected && camera->views[i].has_pose) camera->view_of_frame[camera->views[i].frame] = i;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Extrinsics: pairwise consensus and the spanning tree.
-
-struct Edge {
-  int a = -1, b = -1;
-  int weight = 0;                       // consistent shared frames
-  Pose a_from_b = Pose::Identity();
-};
-
-bool PosesAgree(const Pose& x, const Pose& y, double rotation_deg) {
-  if (RotationAngleDeg(x.linear(), y.linear()) > rotation_deg) return false;
-  const double scale = std::max({x.translation().norm(), y.translation().norm(), 1e-6});
-  return (x.translation() - y.translation()).norm() <= 0.2 * scale;
-}
-
-Edge PairConsensus(const CameraState& a, const CameraState& b, int index_a, int index_b, const Pose& turn,
-                   double rotation_deg) {
-  Edge edge;
-  edge.a = index_a;
-  edge.b = index_b;
-  std::vector<std::array<Pose, 2>> candidates;
-  for (const auto& [frame, view_a] : a.view_of_frame) {
-    const auto found = b.view_of_frame.find(frame);
-    if (found == b.view_of_frame.end()) continue;
-    const Pose& pose_a = a.views[view_a].cam_from_board;
-    const Pose& pose_b = b.views[found->second].cam_from_board;
-    candidates.push_back({pose_a * pose_b.inverse(), pose_a * turn * pose_b.inverse()});
-  }
-  if (candidates.empty()) return edge;
-  int best_count = -1, best_plain = -1;
-  std::vector<int> best_choice;
-  for (std::size_t f = 0; f < candidates.size(); ++f)
-    for (int d = 0; d < 2; ++d) {
-      std::vector<int> choice(candidates.size(), -1);
-      int count = 0, plain = 0;
-      for (std::size_t g = 0; g < candidates.size(); ++g)
-        for (int e = 0; e < 2; ++e)
-          if (PosesAgree(candidates[g][e], candidates[f][d], rotation_deg)) {
-            choice[g] = e;
-            ++count;
-            plain += e == 0;
-            break;
-          }
-      if (count > best_count || (count == best_count && plain > best_plain)) {
-        best_count = count;
-        best_plain = plain;
-        best_choice = choice;
-      }
-    }
-  Eigen::Matrix3d rotation_sum = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d translation_sum = Eigen::Vector3d::Zero();
-  for (std::size_t g = 0; g < candidates.size(); ++g)
-    if (best_choice[g] >= 0) {
-      rotation_sum += candidates[g][best_choice[g]].linear();
-      translation_sum += candidates[g][best_choice[g]].translation();
-    }
-  edge.weight = best_count;
-  edge.a_from_b.linear() = ProjectToRotation(rotation_sum);
-  edge.a_from_b.translation() = translation_sum / best_count;
-  return edge;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Joint adjustment.
-
-struct Observation {
-  int camera = 0;
-  int view = 0;
-  int frame = 0;
-};
-
-struct AdjustmentResult {
-  double initial_rms = 0.0, final_rms = 0.0;
-  int iterations = 0;
-  bool converged = false;
-};
-
-AdjustmentResult Adjust(const CheckerboardSpec& board, const CalibrateOptions& options,
-                        const std::vector<Observation>& observations, std::vector<CameraState>* cameras,
-                        std::vector<std::array<double, 6>>* camera_blocks, std::map<int, std::array<double, 6>>* boards,
-                        bool solve) {
-  const std::vector<Eigen::Vector3d> points = board.CornersInBoard();
-  ceres::HuberLoss loss(options.huber_px);  // shared by every residual block
-  ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  std::set<int> used_cameras;
-  for (const Observation& o : observations) {
-    CameraState& camera = (*cameras)[o.camera];
-    const ViewState& view = camera.views[o.view];
-    for (std::size_t k = 0; k < points.size(); ++k) {
-      auto* cost = new ceres::AutoDiffCostFunction<CornerResidual, 2, 9, 6, 6>(new CornerResidual(points[k], view.corners[k]));
-      problem.AddResidualBlock(cost, &loss, camera.intrinsics,
-                               (*camera_blocks)[o.camera].data(), (*boards)[o.frame].data());
-    }
-    used_cameras.insert(o.camera);
-  }
-  for (int c : used_cameras) {
-    CameraState& camera = (*cameras)[c];
-    if (c == options.reference_camera) problem.SetParameterBlockConstant((*camera_blocks)[c].data());
-    if ((camera.known_intrinsics && !options.refine_known_intrinsics) || camera.reduced_model) {
-      problem.SetParameterBlockConstant(camera.intrinsics);
-    } else {
-      std::vector<int> fixed;
-      if (!options.estimate_tangential) {
-        fixed.push_back(6);
-        fixed.push_back(7);
-      }
-      if (!options.estimate_k3) fixed.push_back(8);
-      if (!fixed.empty()) problem.SetManifold(camera.intrinsics, new ceres::SubsetManifold(9, fixed));
-    }
-  }
-  AdjustmentResult result;
-  auto rms = [&]() {
-    double sum = 0.0;
-    std::size_t count = 0;
-    for (const Observation& o : observations) {
-      const CameraState& camera = (*cameras)[o.camera];
-      const ViewState& view = camera.views[o.view];
-      for (std::size_t k = 0; k < points.size(); ++k) {
-        double pixel[2];
-        ProjectBoardPoint(camera.intrinsics, (*camera_blocks)[o.camera].data(), (*boards)[o.frame].data(),
-                          points[k].data(), pixel);
-        sum += (Eigen::Vector2d(pixel[0], pixel[1]) - view.corners[k]).squaredNorm();
-        ++count;
-      }
-    }
-    return count ? std::sqrt(sum / count) : 0.0;
-  };
-  result.initial_rms = rms();
-  if (solve && !observations.empty()) {
-    ceres::Solver::Options solver_options;
-    solver_options.linear_solver_type = ceres::DENSE_SCHUR;
-    solver_options.max_num_iterations = options.max_iterations;
-    solver_options.num_threads = options.num_threads;
-    solver_options.function_tolerance = 1e-12;
-    solver_options.gradient_tolerance = 1e-14;
-    solver_options.parameter_tolerance = 1e-12;
-    solver_options.logging_type = ceres::SILENT;
-    ceres::Solver::Summary solver_summary;
-    ceres::Solve(solver_options, &problem, &solver_summary);
-    result.iterations = static_cast<int>(solver_summary.iterations.size());
-    result.converged = solver_summary.termination_type == ceres::CONVERGENCE;
-  }
-  result.final_rms = rms();
-  return result;
-}
+namespace {
 
 std::vector<std::string> ImageFilesIn(const std::string& dir) {
   namespace fs = std::filesystem;
@@ -533,6 +123,8 @@ std::vector<std::string> ImageFilesIn(const std::string& dir) {
 }
 
 }  // namespace
+
+using namespace calibrate_internal;
 
 // -----------------------------------------------------------------------------------------------
 
