@@ -1,7 +1,10 @@
 // MeshRenderer: OpenGL 4.3 core rasterisation of meshes into calibrated cameras.
+// The GLSL lives in renderer_shaders.h, the GL resources it holds in renderer_resources.h.
 
 #include "render/renderer.h"
 #include "render/gl_program.h"
+#include "render/renderer_resources.h"
+#include "render/renderer_shaders.h"
 
 #include <epoxy/gl.h>
 
@@ -22,134 +25,7 @@ using render_internal::CheckFaceIndices;
 using render_internal::CheckVertices;
 using render_internal::ClipFromCamera;
 using render_internal::LinkProgram;
-
-// Colour attachments of a render target, in this order (= fragment output locations).
-enum Attachment { kColor = 0, kCameraZ = 1, kTriangleId = 2, kMask = 3, kNumAttachments = 4 };
-
-constexpr const char* kMeshVertexShader = R"(#version 430 core
-layout(location = 0) in vec3 position_in_world;
-layout(location = 1) in vec3 normal_in_world;
-layout(location = 2) in vec3 albedo;
-layout(location = 3) in vec2 uv;
-uniform mat4 clip_from_world;
-uniform mat4 cam_from_world;
-out float camera_z;
-out vec3 v_position;
-out vec3 v_normal;
-out vec3 v_albedo;
-out vec2 v_uv;
-void main() {
-  gl_Position = clip_from_world * vec4(position_in_world, 1.0);
-  camera_z = (cam_from_world * vec4(position_in_world, 1.0)).z;
-  v_position = position_in_world;
-  v_normal = normal_in_world;
-  v_albedo = albedo;
-  v_uv = uv;
-}
-)";
-
-constexpr const char* kMeshFragmentShader = R"(
-in float camera_z;
-in vec3 v_position;
-in vec3 v_normal;
-in vec3 v_albedo;
-in vec2 v_uv;
-layout(location = 0) out vec4 out_color;
-layout(location = 1) out float out_camera_z;
-layout(location = 2) out int out_triangle_id;
-layout(location = 3) out float out_mask;
-uniform int id_offset;
-#ifdef WITH_COLOR
-uniform bool use_texture;
-uniform sampler2D albedo_texture;
-uniform bool lit;
-uniform bool headlight;
-uniform vec3 light_direction;
-uniform vec3 camera_center;
-uniform float ambient;
-uniform float diffuse;
-uniform bool srgb_output;
-vec3 EncodeSrgb(vec3 c) {
-  c = clamp(c, 0.0, 1.0);
-  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));
-}
-#endif
-void main() {
-  out_camera_z = camera_z;
-  out_triangle_id = gl_PrimitiveID + id_offset;
-  out_mask = 1.0;
-#ifdef WITH_COLOR
-  vec3 albedo = use_texture ? texture(albedo_texture, vec2(v_uv.x, 1.0 - v_uv.y)).rgb : v_albedo;
-  vec3 color = albedo;
-  if (lit) {
-    vec3 view = normalize(camera_center - v_position);
-    vec3 n = v_normal;
-    float length_n = length(n);
-    n = length_n > 0.0 ? n / length_n : view;
-    if (dot(n, view) < 0.0) n = -n;  // two-sided lighting
-    vec3 l = headlight ? view : light_direction;
-    color = albedo * (ambient + diffuse * max(dot(n, l), 0.0));
-  }
-  out_color = vec4(srgb_output ? EncodeSrgb(color) : clamp(color, 0.0, 1.0), 1.0);
-#else
-  out_color = vec4(0.0);
-#endif
-}
-)";
-
-
-// Each output (distorted) pixel reads its position in the ideal buffer from `ideal_from_pixel`
-// (RG32F, buffer coordinates with sample centres at integers) and interpolates the coverage
-// mask of the 4 surrounding samples bilinearly: the pixel is covered when that is >= 0.5, which
-// places the outline with sub-sample accuracy. A covered pixel takes depth and triangle id from
-// the covered sample with the largest weight and colour from the weighted covered samples, so
-// silhouette, depth, ids and colour stay mutually consistent.
-constexpr const char* kRemapFragmentShader = R"(#version 430 core
-layout(location = 0) out vec4 out_color;
-layout(location = 1) out float out_camera_z;
-layout(location = 2) out int out_triangle_id;
-layout(location = 3) out float out_mask;
-uniform sampler2D ideal_from_pixel;
-uniform sampler2D ideal_color;
-uniform sampler2D ideal_camera_z;
-uniform isampler2D ideal_triangle_id;
-uniform sampler2D ideal_mask;
-uniform ivec2 ideal_size;  // region of the ideal buffers that was rendered
-uniform vec4 background;
-void main() {
-  vec2 ideal = texelFetch(ideal_from_pixel, ivec2(gl_FragCoord.xy), 0).xy;
-  ivec2 base = ivec2(floor(ideal));
-  vec2 f = ideal - vec2(base);
-  float coverage = 0.0;
-  float best_weight = -1.0;
-  ivec2 best = ivec2(0);
-  vec4 color = vec4(0.0);
-  for (int k = 0; k < 4; ++k) {
-    ivec2 offset = ivec2(k & 1, k >> 1);
-    ivec2 p = base + offset;
-    if (any(lessThan(p, ivec2(0))) || any(greaterThanEqual(p, ideal_size))) continue;
-    float weight = (offset.x == 1 ? f.x : 1.0 - f.x) * (offset.y == 1 ? f.y : 1.0 - f.y);
-    if (texelFetch(ideal_mask, p, 0).r < 0.5) continue;
-    coverage += weight;
-    color += weight * texelFetch(ideal_color, p, 0);
-    if (weight > best_weight) {
-      best_weight = weight;
-      best = p;
-    }
-  }
-  if (coverage < 0.5) {
-    out_color = background;
-    out_camera_z = 0.0;
-    out_triangle_id = -1;
-    out_mask = 0.0;
-    return;
-  }
-  out_color = color / coverage;
-  out_camera_z = texelFetch(ideal_camera_z, best, 0).r;
-  out_triangle_id = texelFetch(ideal_triangle_id, best, 0).r;
-  out_mask = 1.0;
-}
-)";
+using namespace mesh_renderer_internal;
 
 void SetMatrix(GLuint program, const char* name, const Eigen::Matrix4d& matrix) {
   const Eigen::Matrix4f m = matrix.cast<float>();  // column-major, as GL expects
@@ -160,87 +36,6 @@ float EncodeSrgb(double linear) {
   const double c = std::clamp(linear, 0.0, 1.0);
   return static_cast<float>(c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055);
 }
-
-// Offscreen framebuffer with the four colour attachments (textures) and optionally a depth
-// buffer. Storage only grows; a render uses the lower-left width x height region.
-struct Target {
-  GLuint framebuffer = 0;
-  GLuint textures[kNumAttachments] = {0, 0, 0, 0};
-  GLuint depth_buffer = 0;
-  int width = 0;   // allocated size
-  int height = 0;
-  bool float_color = false;
-  bool with_depth = false;
-
-  void Release() {
-    if (framebuffer) glDeleteFramebuffers(1, &framebuffer);
-    glDeleteTextures(kNumAttachments, textures);
-    if (depth_buffer) glDeleteRenderbuffers(1, &depth_buffer);
-    framebuffer = depth_buffer = 0;
-    for (GLuint& t : textures) t = 0;
-    width = height = 0;
-  }
-
-  // Makes the target at least `w` x `h` with the given colour format, and binds it.
-  void Ensure(int w, int h, bool want_float_color, bool want_depth) {
-    if (framebuffer != 0 && w <= width && h <= height && want_float_color == float_color) {
-      glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-      return;
-    }
-    const int new_width = std::max(w, width), new_height = std::max(h, height);
-    Release();
-    width = new_width;
-    height = new_height;
-    float_color = want_float_color;
-    with_depth = want_depth;
-    glGenFramebuffers(1, &framebuffer);
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-    glGenTextures(kNumAttachments, textures);
-    const GLenum formats[kNumAttachments] = {static_cast<GLenum>(float_color ? GL_RGBA32F : GL_RGBA8), GL_R32F,
-                                             GL_R32I, GL_R8};
-    for (int i = 0; i < kNumAttachments; ++i) {
-      glBindTexture(GL_TEXTURE_2D, textures[i]);
-      glTexStorage2D(GL_TEXTURE_2D, 1, formats[i], width, height);
-      const GLint filter = i == kColor ? GL_LINEAR : GL_NEAREST;
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filter);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, GL_TEXTURE_2D, textures[i], 0);
-    }
-    if (with_depth) {
-      glGenRenderbuffers(1, &depth_buffer);
-      glBindRenderbuffer(GL_RENDERBUFFER, depth_buffer);
-      glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, width, height);
-      glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_buffer);
-    }
-    const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
-    if (status != GL_FRAMEBUFFER_COMPLETE) {
-      std::ostringstream out;
-      out << "OpenGL: offscreen framebuffer " << width << "x" << height << " is incomplete (status 0x" << std::hex
-          << status << ")";
-      throw RenderContextError(out.str());
-    }
-  }
-};
-
-// One uploaded mesh. GL vertices are the distinct (vertex, uv) corners; gl_to_mesh maps them
-// back to mesh vertices so that per-frame updates only gather positions and normals.
-struct GpuMesh {
-  std::string name;
-  GLuint vertex_array = 0;
-  GLuint positions = 0, normals = 0, albedos = 0, uvs = 0, indices = 0;
-  GLuint texture = 0;
-  int num_vertices = 0;       // GL vertices
-  int num_mesh_vertices = 0;  // vertices of the uploaded Mesh
-  int num_faces = 0;
-  int id_offset = 0;
-  bool has_colors = false;
-  RowMatrixX3i faces;            // mesh faces (mesh vertex indices), for normals
-  std::vector<int> gl_to_mesh;   // empty = identity
-  std::vector<float> scratch;    // upload staging
-};
-
 std::string Where(int row, const char* what) {
   return std::string(what) + " " + std::to_string(row);
 }
@@ -262,21 +57,6 @@ RowMatrixX3d VertexNormals(const RowMatrixX3d& vertices, const RowMatrixX3i& fac
   }
   return normals;
 }
-
-// Distortion remap of one camera: the ideal buffer's placement and the per-pixel map.
-struct DistortionMap {
-  int width = 0, height = 0;
-  Eigen::Matrix3d K;
-  Vector5d dist;
-  int ideal_x0 = 0, ideal_y0 = 0;  // ideal pixel of the ideal buffer's pixel (0, 0)
-  int ideal_width = 0, ideal_height = 0;
-  GLuint texture = 0;  // RG32F, width x height
-  unsigned long long last_used = 0;
-
-  bool Matches(const Camera& camera) const {
-    return camera.width == width && camera.height == height && camera.K == K && camera.dist == dist;
-  }
-};
 
 }  // namespace
 
