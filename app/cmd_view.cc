@@ -1,7 +1,7 @@
 // confluent view RUN: an interactive GLFW viewer of a run's 3D video (animated scan, or the
 // posed template), with projective texturing from the capture, camera frusta, blend weights,
 // a timeline and screenshots.
-
+// The window's state is in view_state.h, drawing it in view_draw.cc.
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
@@ -17,6 +17,7 @@
 
 #include "app/commands.h"
 #include "app/frame_range.h"
+#include "app/view_state.h"
 #include "app/viewer_run.h"
 #include "calib/capture.h"
 #include "core/error.h"
@@ -27,14 +28,7 @@
 #include "render/viewer_scene.h"
 
 namespace confluent::app {
-namespace {
-namespace fs = std::filesystem;
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kVerticalFovDeg = 40.0;  // of the viewer camera
-constexpr int kTimelineHeightPx = 22;     // the timeline bar at the bottom of the window
-
-enum class Mode { kTextured, kShaded, kWireframe, kWeights };
+namespace view_internal {
 
 const char* ModeName(Mode mode) {
   switch (mode) {
@@ -63,22 +57,6 @@ Eigen::Vector3d CameraColor(int index) {
   return {c[0], c[1], c[2]};
 }
 
-// The orbiting viewer camera: spherical coordinates around a target point.
-struct Orbit {
-  Eigen::Vector3d target = Eigen::Vector3d::Zero();
-  double distance_m = 3.0;
-  double azimuth_deg = -90.0;  // 0 = camera on +x, -90 = camera on -y (in front)
-  double elevation_deg = 15.0;
-
-  Camera View(int width_px, int height_px) const {
-    const double az = azimuth_deg * kPi / 180.0, el = elevation_deg * kPi / 180.0;
-    const Eigen::Vector3d center =
-        target + distance_m * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-    const double focal_px = 0.5 * height_px / std::tan(0.5 * kVerticalFovDeg * kPi / 180.0);
-    return LookAtCamera("view", center, target, width_px, height_px, focal_px);
-  }
-};
-
 // The initial view: looks at the centre of `mesh`'s bounding box from the front (-y), 15 degrees
 // above, from where the bounding sphere fills the vertical field of view with a margin.
 Orbit InitialOrbit(const Mesh& mesh) {
@@ -105,29 +83,6 @@ Camera ScaledCamera(const Camera& camera, double scale) {
   return scaled;
 }
 
-// Lets offscreen EGL work run on this thread: releases the window's (GLX) context, and on exit
-// releases EGL and makes the window's context current again (libglvnd allows one API per thread).
-class OffscreenScope {
- public:
-  explicit OffscreenScope(GLFWwindow* window) : window_(window) { glfwMakeContextCurrent(nullptr); }
-  ~OffscreenScope() {
-    ReleaseCurrentEglContext();
-    glfwMakeContextCurrent(window_);
-  }
-  OffscreenScope(const OffscreenScope&) = delete;
-  OffscreenScope& operator=(const OffscreenScope&) = delete;
-
- private:
-  GLFWwindow* window_;
-};
-
-// The capture behind the run: cameras used for texturing, frames, masks.
-struct CaptureState {
-  std::optional<Capture> capture;
-  std::vector<int> used;  // indices into the rig of the cameras used for texturing
-  std::string error;      // why there is no capture
-};
-
 CaptureState OpenCaptureFor(const ViewerRun& run) {
   CaptureState state;
   if (run.capture.empty()) {
@@ -149,60 +104,6 @@ CaptureState OpenCaptureFor(const ViewerRun& run) {
   }
   return state;
 }
-
-// Everything the window shows and the input handlers change.
-struct Viewer {
-  const ViewerRun* run = nullptr;
-  FrameCache* frames = nullptr;
-  CaptureState* capture = nullptr;
-  GLFWwindow* window = nullptr;
-  std::unique_ptr<ViewerScene> scene;
-
-  int frame = 0;
-  Mode mode = Mode::kShaded;
-  bool show_frusta = false;
-  bool playing = false;
-  double fps = 25.0;
-  Orbit orbit;
-  Eigen::Vector3d background = Eigen::Vector3d(0.12, 0.12, 0.14);
-
-  // Mouse state.
-  bool rotating = false, zooming = false, scrubbing = false;
-  double last_x = 0.0, last_y = 0.0;
-
-  // What the GPU holds.
-  int uploaded_frame = -1;
-  bool uploaded_weights = false;
-  bool frusta_uploaded = false;
-  std::shared_ptr<const Mesh> mesh;  // the current frame's mesh (null when missing)
-  std::string frame_error;
-  std::string note;                  // why the mode fell back (set by every Draw), in the title
-  std::string message;               // last key action's result (saved screenshot), in the title
-  bool dirty = true;
-  int drawn_frames = 0;
-
-  // Offscreen texturing and visibility (EGL), created on first use.
-  std::unique_ptr<ProjectiveTexturer> texturer;
-  int texturer_vertices = -1;
-  int texturer_frame = -1;
-  std::string texture_error;
-  std::unique_ptr<MeshRenderer> depth_renderer;
-  int depth_frame = -1;
-  std::vector<Camera> depth_cameras;  // used cameras at reduced resolution
-  std::vector<Image> depth_maps;
-
-  void SetFrame(int new_frame) {
-    new_frame = std::clamp(new_frame, run->first_frame, run->last_frame);
-    if (new_frame != frame) {
-      frame = new_frame;
-      dirty = true;
-    }
-  }
-  void Step(int delta) {
-    const int n = run->num_frames();
-    SetFrame(run->first_frame + ((frame - run->first_frame + delta) % n + n) % n);
-  }
-};
 
 Viewer* GetViewer(GLFWwindow* window) { return static_cast<Viewer*>(glfwGetWindowUserPointer(window)); }
 
@@ -232,219 +133,11 @@ void UpdateGeometry(Viewer& viewer) {
   viewer.uploaded_weights = false;
 }
 
-// Lines of the capture cameras' frusta, each drawn to a fifth of the camera's distance to
-// `target_in_world`: used cameras in their colour, excluded ones grey.
-std::vector<ViewerLine> FrustumLines(const CaptureState& capture, const Eigen::Vector3d& target_in_world) {
-  std::vector<ViewerLine> lines;
-  if (!capture.capture) return lines;
-  const Rig& rig = capture.capture->rig();
-  for (int i = 0; i < rig.size(); ++i) {
-    const Camera& camera = rig.cameras[i];
-    const auto used = std::find(capture.used.begin(), capture.used.end(), i);
-    const Eigen::Vector3d color = used == capture.used.end()
-                                      ? Eigen::Vector3d(0.55, 0.55, 0.55)
-                                      : CameraColor(static_cast<int>(used - capture.used.begin()));
-    const Eigen::Vector3d center = camera.center_in_world();
-    const double depth_m = std::max(0.05, 0.2 * (target_in_world - center).norm());
-    const double w = camera.width - 0.5, h = camera.height - 0.5;
-    const Eigen::Vector2d pixels[4] = {{-0.5, -0.5}, {w, -0.5}, {w, h}, {-0.5, h}};
-    Eigen::Vector3d corners[4];
-    for (int k = 0; k < 4; ++k) corners[k] = camera.Unproject(pixels[k], depth_m);
-    for (int k = 0; k < 4; ++k) {
-      lines.push_back({center, corners[k], color});
-      lines.push_back({corners[k], corners[(k + 1) % 4], color});
-    }
-    // A tick on the top edge shows which way is up in the image.
-    const Eigen::Vector3d top = camera.Unproject(Eigen::Vector2d(0.5 * w, -0.25 * h), depth_m);
-    lines.push_back({corners[0] + 0.25 * (corners[1] - corners[0]), top, color});
-    lines.push_back({corners[0] + 0.75 * (corners[1] - corners[0]), top, color});
-  }
-  return lines;
-}
+}  // namespace view_internal
 
-// Per-vertex colour of the input camera with the largest blend weight for `view`: among the
-// cameras that see the vertex (depth test against a depth map, facing the camera, inside the
-// image), the one whose ray is closest in angle to the view ray (Buehler et al. 2001). Dark grey
-// where no camera sees the vertex. Needs the capture; throws on GL failures.
-RowMatrixX3f DominantCameraColors(Viewer& viewer, const Camera& view) {
-  const Mesh& mesh = *viewer.mesh;
-  const CaptureState& capture = *viewer.capture;
-  if (viewer.depth_frame != viewer.frame) {
-    OffscreenScope offscreen(viewer.window);
-    if (!viewer.depth_renderer) {
-      viewer.depth_renderer = std::make_unique<MeshRenderer>();
-      viewer.depth_renderer->AddMesh(mesh, viewer.run->FramePath(viewer.frame));
-    } else {
-      viewer.depth_renderer->UpdateVertices(0, mesh.vertices);
-    }
-    viewer.depth_cameras.clear();
-    viewer.depth_maps.clear();
-    RenderRequest request;
-    request.color = false;
-    request.depth = true;
-    for (int index : capture.used) {
-      const Camera& camera = capture.capture->rig().cameras[index];
-      const double scale = std::min(1.0, 320.0 / std::max(camera.width, camera.height));
-      viewer.depth_cameras.push_back(ScaledCamera(camera, scale));
-      viewer.depth_maps.push_back(viewer.depth_renderer->Render(viewer.depth_cameras.back(), request).depth);
-    }
-    viewer.depth_frame = viewer.frame;
-  }
-  const RowMatrixX3d normals = VertexNormals(mesh);
-  const Eigen::Vector3d view_center = view.center_in_world();
-  RowMatrixX3f colors(mesh.num_vertices(), 3);
-  constexpr double kDepthBias = 0.03;
-  for (int v = 0; v < mesh.num_vertices(); ++v) {
-    const Eigen::Vector3d point = mesh.vertices.row(v).transpose();
-    const Eigen::Vector3d to_view = (view_center - point).normalized();
-    int best = -1;
-    double best_angle = 1e9;
-    for (std::size_t c = 0; c < viewer.depth_cameras.size(); ++c) {
-      const Camera& camera = viewer.depth_cameras[c];
-      const Eigen::Vector3d to_camera = (camera.center_in_world() - point).normalized();
-      if (normals.row(v).dot(to_camera) <= 0.0) continue;
-      Eigen::Vector2d pixel;
-      if (!camera.ProjectChecked(point, &pixel)) continue;
-      const int x = static_cast<int>(std::lround(pixel.x())), y = static_cast<int>(std::lround(pixel.y()));
-      if (x < 0 || y < 0 || x >= camera.width || y >= camera.height) continue;
-      const float depth = viewer.depth_maps[c].at<float>(x, y);
-      if (depth <= 0.0f || camera.PointInCamera(point).z() > depth + kDepthBias) continue;
-      const double angle = std::acos(std::clamp(to_view.dot(to_camera), -1.0, 1.0));
-      if (angle < best_angle) {
-        best_angle = angle;
-        best = static_cast<int>(c);
-      }
-    }
-    const Eigen::Vector3d color = best < 0 ? Eigen::Vector3d(0.2, 0.2, 0.2) : CameraColor(best);
-    colors.row(v) = color.cast<float>().transpose();
-  }
-  return colors;
-}
-
-// Renders the textured view offscreen (ProjectiveTexturer) and returns it; empty on failure
-// (viewer.texture_error says why).
-Image TexturedView(Viewer& viewer, const Camera& view) {
-  const CaptureState& capture = *viewer.capture;
-  const Mesh& mesh = *viewer.mesh;
-  OffscreenScope offscreen(viewer.window);
-  try {
-    if (!viewer.texturer || viewer.texturer_vertices != mesh.num_vertices()) {
-      ProjectiveTextureOptions options;
-      options.background = viewer.background;
-      viewer.texturer = std::make_unique<ProjectiveTexturer>(mesh, options);
-      viewer.texturer_vertices = mesh.num_vertices();
-      viewer.texturer_frame = -1;
-    }
-    if (viewer.texturer_frame != viewer.frame) {
-      if (viewer.frame >= capture.capture->num_frames())
-        throw InputError(capture.capture->root(), "the capture has no frame " + std::to_string(viewer.frame));
-      std::vector<Camera> cameras;
-      std::vector<Image> images, masks;
-      const fs::path run_masks = fs::path(viewer.run->root) / "masks";
-      bool any_mask = false;
-      for (int index : capture.used) {
-        const Camera& camera = capture.capture->rig().cameras[index];
-        cameras.push_back(camera);
-        images.push_back(capture.capture->ReadFrame(index, viewer.frame));
-        const fs::path mask_path = run_masks / camera.name / (FrameStem(viewer.frame) + ".png");
-        Image mask;
-        if (fs::exists(mask_path)) {
-          mask = ReadMaskFile(mask_path.string());
-        } else if (capture.capture->has_masks()) {
-          mask = capture.capture->ReadMask(index, viewer.frame);
-        }
-        any_mask = any_mask || !mask.empty();
-        masks.push_back(std::move(mask));
-      }
-      if (!any_mask) masks.clear();
-      viewer.texturer->SetFrame(mesh.vertices, cameras, images, masks);
-      viewer.texturer_frame = viewer.frame;
-    }
-    viewer.texture_error.clear();
-    return viewer.texturer->Render(view).color;
-  } catch (const std::exception& e) {
-    viewer.texture_error = e.what();
-    viewer.texturer_frame = -1;
-    return {};
-  }
-}
-
-// Draws the current state into the window's back buffer.
-void Draw(Viewer& viewer, bool with_timeline) {
-  int width = 1, height = 1;
-  glfwGetFramebufferSize(viewer.window, &width, &height);
-  width = std::max(width, 1);
-  height = std::max(height, 1);
-  UpdateGeometry(viewer);
-  const Camera view = viewer.orbit.View(width, height);
-  ViewerMeshOptions options;
-  options.near_m = std::max(0.005, 0.01 * viewer.orbit.distance_m);
-  options.far_m = 100.0 * viewer.orbit.distance_m + 100.0;
-  viewer.note.clear();
-
-  Mode mode = viewer.mode;
-  if ((mode == Mode::kTextured || mode == Mode::kWeights) && !viewer.capture->capture) {
-    viewer.note = std::string(ModeName(mode)) + " needs the capture: " + viewer.capture->error;
-    mode = Mode::kShaded;
-  }
-  Image textured;
-  if (viewer.mesh && mode == Mode::kTextured) {
-    textured = TexturedView(viewer, view);
-    if (textured.empty()) {
-      viewer.note = "texturing failed: " + viewer.texture_error;
-      mode = Mode::kShaded;
-    }
-  }
-  if (viewer.mesh && mode == Mode::kWeights) {
-    try {
-      RowMatrixX3f colors = DominantCameraColors(viewer, view);
-      viewer.scene->SetMeshColors(colors);
-      viewer.uploaded_weights = true;
-    } catch (const std::exception& e) {
-      viewer.note = std::string("blend weights failed: ") + e.what();
-      mode = Mode::kShaded;
-    }
-  }
-  if (mode != Mode::kWeights && viewer.uploaded_weights) {
-    viewer.scene->SetMeshColors({});
-    viewer.uploaded_weights = false;
-  }
-
-  viewer.scene->Clear(width, height, viewer.background);
-  if (viewer.mesh) {
-    if (mode == Mode::kTextured) {
-      viewer.scene->SetImage(textured);
-      viewer.scene->DrawImage();
-    } else {
-      options.style = mode == Mode::kWireframe ? ViewerMeshStyle::kWireframe
-                      : mode == Mode::kWeights ? ViewerMeshStyle::kFlat
-                                               : ViewerMeshStyle::kShaded;
-      viewer.scene->DrawMesh(view, options);
-    }
-  }
-  if (viewer.show_frusta && !viewer.frusta_uploaded) {
-    viewer.scene->SetLines(FrustumLines(*viewer.capture, viewer.orbit.target));
-    viewer.frusta_uploaded = true;
-  }
-  if (viewer.show_frusta) viewer.scene->DrawLines(view, options);
-  if (with_timeline) {
-    std::vector<ViewerRect> rects;
-    const double y0 = height - kTimelineHeightPx, y1 = height;
-    rects.push_back({0.0, y0, double(width), y1, Eigen::Vector4d(0.0, 0.0, 0.0, 0.6)});
-    const int n = viewer.run->num_frames();
-    const double slot = static_cast<double>(width) / n;
-    const double played = (viewer.frame - viewer.run->first_frame + 1) * slot;
-    rects.push_back({0.0, y0 + 8, played, y1 - 8, Eigen::Vector4d(0.3, 0.55, 0.9, 0.9)});
-    for (int f = viewer.run->first_frame; f <= viewer.run->last_frame; ++f)
-      if (!viewer.run->has_frame(f)) {
-        const double x = (f - viewer.run->first_frame) * slot;
-        rects.push_back({x, y0 + 4, x + std::max(1.0, slot), y1 - 4, Eigen::Vector4d(0.9, 0.2, 0.2, 0.9)});
-      }
-    const double cursor = (viewer.frame - viewer.run->first_frame + 0.5) * slot;
-    rects.push_back({cursor - 2.0, y0 + 2, cursor + 2.0, y1 - 2, Eigen::Vector4d(1.0, 1.0, 1.0, 1.0)});
-    viewer.scene->DrawRects(rects, width, height);
-  }
-}
+namespace {
+namespace fs = std::filesystem;
+using namespace view_internal;
 
 void UpdateTitle(Viewer& viewer) {
   std::string title = "confluent view " + fs::path(viewer.run->root).filename().string() + " - " +
