@@ -74,6 +74,28 @@ void CheckExrHeader(const std::string& path) {
   }
 }
 
+// A PNG whose data ends before its IEND chunk makes libpng long-jump out of OpenImageIO 2.4's
+// read callback, leaking the error text it holds. Walks the chunk list of a .png file (magic
+// 89 50 4E 47) by its lengths, reading 8 bytes per chunk, and throws InputError when the file
+// ends before IEND. Other files are left to OpenImageIO.
+void CheckPngComplete(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  char magic[8] = {};
+  if (!file.read(magic, 8) || std::memcmp(magic, "\x89PNG\r\n\x1a\n", 8) != 0) return;
+  file.seekg(0, std::ios::end);
+  const std::streamoff size = file.tellg();
+  std::streamoff at = 8;
+  while (at + 8 <= size) {
+    unsigned char header[8];
+    file.seekg(at);
+    if (!file.read(reinterpret_cast<char*>(header), 8)) break;
+    const std::streamoff length = (std::streamoff{header[0]} << 24) | (header[1] << 16) | (header[2] << 8) | header[3];
+    if (std::memcmp(header + 4, "IEND", 4) == 0) return;
+    at += 12 + length;  // length, type, data, CRC
+  }
+  throw InputError(path, "truncated PNG (the file ends before its IEND chunk)");
+}
+
 std::unique_ptr<OIIO::ImageInput> OpenInput(const std::string& path) {
   std::error_code error;
   if (!std::filesystem::exists(path, error)) throw InputError(path, "no such file");
@@ -93,6 +115,7 @@ std::unique_ptr<OIIO::ImageInput> OpenInput(const std::string& path) {
 
 Image ReadImage(const std::string& path) {
   auto input = OpenInput(path);
+  CheckPngComplete(path);
   const OIIO::ImageSpec& spec = input->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
     throw InputError(path, "image has no pixels");
