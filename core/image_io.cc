@@ -28,16 +28,26 @@ OIIO::TypeDesc OiioType(PixelType type) {
   return OIIO::TypeDesc::UINT8;
 }
 
+// Whether `file` starts with the `length` bytes of `magic`; if so, `*size` is the file's size
+// in bytes.
+bool StartsWithMagic(std::ifstream& file, const char* magic, std::size_t length, std::streamoff* size) {
+  char start[8] = {};
+  if (length > sizeof(start) || !file.read(start, static_cast<std::streamsize>(length)) ||
+      std::memcmp(start, magic, length) != 0)
+    return false;
+  file.seekg(0, std::ios::end);
+  *size = file.tellg();
+  return true;
+}
+
 // OpenEXR 3.1 believes the sizes of header attributes: a corrupt one makes it allocate up to
 // 2 GB before reading a byte of it (found by fuzzing). Walks the attribute list of an .exr file
 // (every header of a multi-part file; magic 76 2f 31 01) and throws InputError when an attribute
 // claims more bytes than the file holds. Other files are left to OpenImageIO.
 void CheckExrHeader(const std::string& path) {
   std::ifstream file(path, std::ios::binary);
-  char magic[4] = {};
-  if (!file.read(magic, 4) || std::memcmp(magic, "\x76\x2f\x31\x01", 4) != 0) return;
-  file.seekg(0, std::ios::end);
-  const std::streamoff size = file.tellg();
+  std::streamoff size = 0;
+  if (!StartsWithMagic(file, "\x76\x2f\x31\x01", 4, &size)) return;
   // Headers are small: the first 16 MiB hold any real one.
   file.seekg(0);
   std::vector<char> bytes(static_cast<std::size_t>(std::min<std::streamoff>(size, std::streamoff{1} << 24)));
@@ -80,10 +90,8 @@ void CheckExrHeader(const std::string& path) {
 // ends before IEND. Other files are left to OpenImageIO.
 void CheckPngComplete(const std::string& path) {
   std::ifstream file(path, std::ios::binary);
-  char magic[8] = {};
-  if (!file.read(magic, 8) || std::memcmp(magic, "\x89PNG\r\n\x1a\n", 8) != 0) return;
-  file.seekg(0, std::ios::end);
-  const std::streamoff size = file.tellg();
+  std::streamoff size = 0;
+  if (!StartsWithMagic(file, "\x89PNG\r\n\x1a\n", 8, &size)) return;
   std::streamoff at = 8;
   while (at + 8 <= size) {
     unsigned char header[8];
