@@ -1,12 +1,9 @@
 // The capture-side stages of `confluent run`: silhouettes and tracking.
 
 #include <algorithm>
-#include <atomic>
-#include <exception>
 #include <filesystem>
 #include <map>
 #include <mutex>
-#include <thread>
 
 #include "app/run_stages.h"
 #include "core/bvh_io.h"
@@ -57,58 +54,24 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
 
   SilhouetteOptions options;
   options.threads = inputs.threads;
-  options.Check();
-  std::size_t todo = 0;
-  for (int c = 0; c < num_cameras; ++c) todo += inputs.frames.end - first_missing[c];
-  std::mutex mutex;  // guards the notes, the timings, the progress and the first error
+  std::mutex mutex;
   std::map<int, int> cameras_done;
   for (int frame = frames_done; frame < inputs.frames.end; ++frame)
     for (int c = 0; c < num_cameras; ++c) cameras_done[frame] += first_missing[c] > frame;
   double last_frame_done = NowSeconds();
-  std::size_t done = 0;
-  std::atomic<int> next_camera{0};
-  std::atomic<bool> failed{false};
-  std::exception_ptr error;
-  std::vector<std::vector<std::string>> warnings(num_cameras);  // per camera, reported in camera order
-  auto worker = [&]() {
-    try {
-      for (int c = next_camera++; c < num_cameras && !failed; c = next_camera++) {
-        if (first_missing[c] == inputs.frames.end) continue;
-        const Camera& camera = capture.rig().cameras[c];
-        SilhouetteExtractor extractor(
-            camera.name, capture.BackgroundPath(c), [&capture, c](int frame) { return capture.ReadFrame(c, frame); },
-            capture.num_frames(), inputs.frames.first, options);
-        // MOG2 learns from every frame it sees: replay the finished frames (masks not written).
-        const bool stateful = extractor.info().method == SilhouetteMethod::kMog2;
-        for (int frame = stateful ? inputs.frames.first : first_missing[c]; frame < inputs.frames.end && !failed; ++frame) {
-          MaskSummary summary;
-          const Image mask = extractor.Extract(capture.ReadFrame(c, frame), frame, &summary, capture.FramePath(c, frame));
-          if (frame < first_missing[c]) continue;
-          WriteImage(RunMaskPath(inputs, c, frame), mask);
-          std::lock_guard<std::mutex> lock(mutex);
-          if (summary.empty) report.notes.push_back("empty mask: " + camera.name + " frame " + std::to_string(frame));
-          if (++cameras_done[frame] == num_cameras) {
-            const double now = NowSeconds();
-            timings->Add("silhouettes", frame, now - last_frame_done);
-            last_frame_done = now;
-          }
-          ReportProgress(progress, "silhouettes", ++done, todo, camera.name + " frame " + std::to_string(frame));
-        }
-        warnings[c] = extractor.info().warnings;
-      }
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(mutex);
-      if (!error) error = std::current_exception();
-      failed = true;
+  auto sink = [&](int camera, int frame, const Image&, const Image& mask, const MaskSummary& summary) {
+    WriteImage(RunMaskPath(inputs, camera, frame), mask);
+    std::lock_guard<std::mutex> lock(mutex);
+    if (summary.empty) report.notes.push_back("empty mask: " + capture.rig().cameras[camera].name + " frame " + std::to_string(frame));
+    if (++cameras_done[frame] == num_cameras) {
+      const double now = NowSeconds();
+      timings->Add("silhouettes", frame, now - last_frame_done);
+      last_frame_done = now;
     }
   };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < std::min(options.threads, num_cameras); ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& thread : pool) thread.join();
-  if (error) std::rethrow_exception(error);
-  for (int c = 0; c < num_cameras; ++c)
-    for (const std::string& warning : warnings[c]) report.notes.push_back(capture.rig().cameras[c].name + ": " + warning);
+  const SilhouetteSummary summary =
+      ExtractSilhouettes(capture, inputs.frames.first, inputs.frames.end, options, sink, progress, first_missing);
+  for (const std::string& warning : summary.warnings) report.notes.push_back(warning);
   report.computed = inputs.frames.end - frames_done;
   report.seconds = NowSeconds() - start;
   timings->Save();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
@@ -258,13 +259,17 @@ Image SilhouetteExtractor::Extract(const Image& frame, int frame_index, MaskSumm
 
 SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, int end_frame,
                                      const SilhouetteOptions& options, const MaskSink& sink,
-                                     const ProgressCallback& progress) {
+                                     const ProgressCallback& progress, const std::vector<int>& resume_at) {
   options.Check();
   if (first_frame < 0 || end_frame > capture.num_frames() || first_frame >= end_frame)
     throw UsageError("--frames " + std::to_string(first_frame) + ":" + std::to_string(end_frame) +
                      " is not a non-empty range within 0:" + std::to_string(capture.num_frames()));
   const int num_cameras = capture.num_cameras();
   const int num_frames = end_frame - first_frame;
+  if (!resume_at.empty() && static_cast<int>(resume_at.size()) != num_cameras) std::abort();
+  for (int frame : resume_at)
+    if (frame < first_frame || frame > end_frame) std::abort();
+  auto resume = [&](int c) { return resume_at.empty() ? first_frame : resume_at[c]; };
   SilhouetteSummary summary;
   summary.cameras.resize(num_cameras);
   summary.masks.resize(static_cast<std::size_t>(num_cameras) * num_frames);
@@ -274,7 +279,8 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
   std::mutex mutex;  // guards progress reports and the first error
   std::exception_ptr error;
   std::size_t done = 0;
-  const std::size_t total = static_cast<std::size_t>(num_cameras) * num_frames;
+  std::size_t total = 0;
+  for (int c = 0; c < num_cameras; ++c) total += static_cast<std::size_t>(end_frame - resume(c));
   auto worker = [&]() {
     try {
       for (int c = next_camera++; c < num_cameras && !failed; c = next_camera++) {
@@ -283,11 +289,14 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
             camera.name, capture.BackgroundPath(c), [&capture, c](int frame) { return capture.ReadFrame(c, frame); },
             capture.num_frames(), first_frame, options);
         summary.cameras[c] = extractor.info();
-        for (int f = first_frame; f < end_frame && !failed; ++f) {
+        if (resume(c) == end_frame) continue;
+        const bool learns = extractor.info().method == SilhouetteMethod::kMog2;  // learns from every frame it sees
+        for (int f = learns ? first_frame : resume(c); f < end_frame && !failed; ++f) {
           const Image image = capture.ReadFrame(c, f);
           MaskSummary& mask_summary = summary.masks[static_cast<std::size_t>(c) * num_frames + (f - first_frame)];
           const Image mask = extractor.Extract(image, f, &mask_summary, capture.FramePath(c, f));
           mask_summary.camera = c;
+          if (f < resume(c)) continue;
           if (sink) sink(c, f, image, mask, mask_summary);
           std::lock_guard<std::mutex> lock(mutex);
           ReportProgress(progress, "silhouettes", ++done, total, camera.name + " frame " + std::to_string(f));

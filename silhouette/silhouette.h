@@ -134,8 +134,11 @@ using MaskSink = std::function<void(int camera, int frame, const Image& image, c
 // cameras in parallel (options.threads), reporting progress per camera-frame ("silhouettes").
 // Plates are the capture's background/<cam> images. Throws InputError naming the file for bad
 // plates or frames, UsageError for a bad range or options.
+// `resume_at` (empty, or one frame per camera in [first_frame, end_frame]) resumes a camera
+// there: its earlier frames reach neither the sink nor the progress (a learning method, MOG2,
+// still sees them), while the extractor is prepared at first_frame as in an uninterrupted run.
 SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, int end_frame,
                                      const SilhouetteOptions& options, const MaskSink& sink,
-                                     const ProgressCallback& progress = {});
+                                     const ProgressCallback& progress = {}, const std::vector<int>& resume_at = {});
 
 }  // namespace confluent
