@@ -194,6 +194,15 @@ TEST(EasyMocapIoTest, MalformedOrMissingFilesAreInputErrors) {
   ExpectReadError(dir, {dir / "extri.yml", "camera a", "missing Rot_a or R_a"});
 }
 
+// OpenCV 4.6's YAML parser never returns from a nested map entry without a name (found by
+// fuzzing); the reader refuses it, naming the file, before OpenCV sees it.
+TEST(EasyMocapIoTest, EntryWithoutANameIsRefusedNotParsedForEver) {
+  TempDir dir;
+  WriteFile(dir / "intri.yml", "%YAML:1.0\nK_a: !!opencv-matrix\n   rows: 3\n  : 1\n");
+  WriteFile(dir / "extri.yml", Extri(kIdentity));
+  ExpectReadError(dir, {dir / "intri.yml", "entry without a name"});
+}
+
 TEST(EasyMocapIoTest, UnwritableNameIsAnOutputError) {
   TempDir dir;
   Rig rig = ExampleRig();
