@@ -17,7 +17,6 @@ namespace confluent {
 namespace {
 
 // ReadImage refuses images whose pixels would need more memory than this.
-constexpr std::size_t kMaxImageBytes = std::size_t{1} << 29;
 
 OIIO::TypeDesc OiioType(PixelType type) {
   switch (type) {
@@ -121,7 +120,7 @@ std::unique_ptr<OIIO::ImageInput> OpenInput(const std::string& path) {
 
 }  // namespace
 
-Image ReadImage(const std::string& path) {
+Image ReadImage(const std::string& path, std::size_t max_pixel_bytes) {
   auto input = OpenInput(path);
   CheckPngComplete(path);
   const OIIO::ImageSpec& spec = input->spec();
@@ -130,12 +129,18 @@ Image ReadImage(const std::string& path) {
   PixelType type = PixelType::kFloat32;
   if (spec.format == OIIO::TypeDesc::UINT8) type = PixelType::kUInt8;
   else if (spec.format == OIIO::TypeDesc::UINT16) type = PixelType::kUInt16;
-  // The header's size is believed only up to 512 MiB of pixels (8K RGBA at 16 bits): a
-  // corrupt or hostile header must not make us allocate without bound.
-  const double bytes = static_cast<double>(spec.width) * spec.height * spec.nchannels * BytesPerChannel(type);
-  if (bytes > static_cast<double>(kMaxImageBytes))
+  // The header's size is believed only up to `max_pixel_bytes`, in the type we return and in
+  // the stored type (decoders buffer the latter): a corrupt or hostile header must not make
+  // us allocate without bound. OpenImageIO reads scanlines in blocks of 256 rows, so an image
+  // of a few rows counts as 256 (a 6-row PPM 6.7 million pixels wide asked for 5 GB).
+  constexpr int kRowsPerReadBlock = 256;
+  const double pixels = static_cast<double>(spec.width) * std::max(spec.height, kRowsPerReadBlock) * spec.nchannels;
+  const double bytes = pixels * std::max<double>(BytesPerChannel(type), static_cast<double>(spec.format.size()));
+  if (bytes > static_cast<double>(max_pixel_bytes))
     throw InputError(path, "image too large: " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " with " +
-                               std::to_string(spec.nchannels) + " channels needs more than 512 MiB (corrupt header?)");
+                               std::to_string(spec.nchannels) + " channels needs " + std::to_string(static_cast<long long>(bytes)) +
+                               " bytes, more than the limit of " + std::to_string(max_pixel_bytes) +
+                               " (corrupt header?)");
   Image image(spec.width, spec.height, spec.nchannels, type);
   const bool ok = input->read_image(0, 0, 0, spec.nchannels, OiioType(type), image.data.data());
   std::string message = input->geterror();

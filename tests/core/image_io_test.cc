@@ -76,6 +76,33 @@ TEST(ImageIo, MissingAndNonImageFilesAreInputErrors) {
   EXPECT_THROW(ReadImageInfo(dir / "text.png"), InputError);
 }
 
+// The size limit counts the pixels in the stored type: a 16-bit PNG of 100x300 RGB holds
+// 180,000 bytes; with a limit of 150,000 it is refused before any pixel is decoded, naming the
+// file and the size, and read whole under a limit of 200,000.
+TEST(ImageIo, SizeLimitRefusesBeforeDecodingAndNamesTheFile) {
+  testing::TempDir dir;
+  WriteImage(dir / "deep.png", Gradient(100, 300, 3, PixelType::kUInt16));
+  try {
+    ReadImage(dir / "deep.png", 150000);
+    FAIL() << "an image over the limit was read";
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("deep.png"), std::string::npos) << message;
+    EXPECT_NE(message.find("100x300"), std::string::npos) << message;
+    EXPECT_NE(message.find("too large"), std::string::npos) << message;
+  }
+  EXPECT_EQ(ReadImage(dir / "deep.png", 200000).data, Gradient(100, 300, 3, PixelType::kUInt16).data);
+}
+
+// OpenImageIO decodes scanlines in blocks of 256 rows, so a wide image of few rows counts as
+// 256 rows: 1000x2 RGB at 8 bits holds 6,000 bytes but is read through a 768,000-byte block.
+TEST(ImageIo, SizeLimitCountsTheDecodersRowBlock) {
+  testing::TempDir dir;
+  WriteImage(dir / "strip.png", Gradient(1000, 2, 3, PixelType::kUInt8));
+  EXPECT_THROW(ReadImage(dir / "strip.png", 100000), InputError);
+  EXPECT_EQ(ReadImage(dir / "strip.png", 800000).width, 1000);
+}
+
 TEST(ImageIo, WriteIntoUnwritablePlaceIsOutputError) {
   testing::TempDir dir;
   std::ofstream(dir / "file") << "x";
