@@ -4,7 +4,7 @@
 #include <filesystem>
 
 #include "app/commands.h"
-#include "app/run_folder.h"
+#include "pipeline/run_folder.h"
 #include "calib/capture.h"
 #include "calib/rig_check.h"
 #include "core/error.h"

@@ -10,9 +10,10 @@
 #include <optional>
 
 #include "app/commands.h"
-#include "app/frame_range.h"
+#include "pipeline/frame_range.h"
 #include "app/plot.h"
-#include "app/run_folder.h"
+#include "pipeline/finished_run.h"
+#include "pipeline/run_folder.h"
 #include "app/texture_args.h"
 #include "app/run_report.h"
 #include "calib/capture.h"
@@ -121,12 +122,11 @@ std::string Csv(double v) {
 double MeanVertexError(const Mesh& a, const Mesh& b) { return (a.vertices - b.vertices).rowwise().norm().mean(); }
 
 int RunEvaluate(const ParsedArgs& args, const Context& context) {
-  const std::string root = args.positionals()[0];
-  RunFolder run{args.get("run")};
-  if (!fs::is_directory(run.root)) throw InputError(run.root, "run folder not found");
+  const FinishedRun finished = OpenFinishedRun(args.get("run"), args.positionals().empty() ? "" : args.positionals()[0]);
+  const RunFolder& run = finished.folder;
   CaptureOptions capture_options;
   capture_options.check_every_image_header = false;
-  const Capture capture = Capture::Open(root, capture_options);
+  const Capture capture = Capture::Open(finished.capture_root, capture_options);
   const Rig& rig = capture.rig();
   const FrameRange range = ParseFrameRange(args.get("frames"), capture.num_frames());
   const int every = args.get_int("every", 1);
@@ -135,17 +135,17 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   const ProjectiveTextureOptions texture_options = TextureOptionsFromArgs(args);
 
   // Cameras: held out (scored) and the ones the run used (texturing).
-  std::vector<std::string> run_excluded;
-  if (fs::exists(run.Path("run.json"))) {
-    try {
-      run_excluded = nlohmann::json::parse(ReadTextFile(run.Path("run.json"))).value("excluded_cameras", run_excluded);
-    } catch (const nlohmann::json::exception& e) {
-      throw InputError(run.Path("run.json"), std::string("not a run.json: ") + e.what());
-    }
-  }
+  const std::vector<std::string> run_excluded = finished.HeldOutCameras();
+  // Scored: the cameras named, else the ones the run held out.
+  const std::vector<std::string> heldout_names = args.has("heldout") ? args.get_all("heldout") : run_excluded;
+  if (heldout_names.empty())
+    throw UsageError(finished.manifest ? "--heldout: " + RunManifestPath(run.root) +
+                                             " records no held-out camera; name the camera(s) to score"
+                                       : "--heldout: name the camera(s) to score (" + run.root +
+                                             " has no run.json recording them)");
   std::vector<int> heldout;
   std::vector<std::string> warnings;
-  for (const std::string& name : args.get_all("heldout")) {
+  for (const std::string& name : heldout_names) {
     rig.Get(name);  // UsageError listing the known names
     heldout.push_back(rig.IndexOf(name));
     if (std::find(run_excluded.begin(), run_excluded.end(), name) == run_excluded.end())
@@ -330,7 +330,7 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   for (std::size_t i = 0; i < rows.size(); i += heldout.size()) vertex_errors.push_back(rows[i].vertex_error_m);
 
   EvaluationSummary summary;
-  summary.heldout = args.get_all("heldout");
+  summary.heldout = heldout_names;
   summary.frames = static_cast<int>(frames.size());
   summary.has_scan = has_scan;
   summary.background = over_plates ? "clean plate" : "black";
@@ -415,7 +415,7 @@ CommandSpec MakeEvaluateCommand() {
   CommandSpec spec;
   spec.name = "evaluate";
   spec.summary = "score a run on held-out cameras: silhouette IoU/XOR, PSNR/SSIM, vertex error, report.html";
-  spec.usage = "CAPTURE --run RUN --heldout NAME... [--masks DIR] [--gt-meshes DIR]";
+  spec.usage = "[CAPTURE] --run RUN [--heldout NAME]... [--masks DIR] [--gt-meshes DIR]";
   spec.description =
       "For each held-out camera and frame, renders the run's animated scan and its template, projectively\n"
       "textured from the cameras the run used, into the held-out camera and compares with the real image:\n"
@@ -435,11 +435,13 @@ CommandSpec MakeEvaluateCommand() {
       "True silhouettes come from --masks DIR, else from the run's extracted masks (RUN/masks).\n"
       "With --gt-meshes DIR (meshes with the scan's topology, DIR/<frame>.ply) the scan's mean vertex error\n"
       "is reported. Writes RUN/metrics.json, metrics.csv, plots/*.png (per-frame metrics, error heat maps),\n"
-      "evaluation/<cam>/<frame>.png (real | scan | template | difference) and report.html.";
-  spec.min_positionals = spec.max_positionals = 1;
+      "evaluation/<cam>/<frame>.png (real | scan | template | difference) and report.html.\n"
+      "CAPTURE and the held-out cameras default to the ones RUN/run.json records.";
+  spec.min_positionals = 0;
+  spec.max_positionals = 1;
   spec.options = {
       {"run", "RUN", "the run folder", false, true},
-      {"heldout", "NAME", "held-out camera to score", true, true},
+      {"heldout", "NAME", "held-out camera to score (default: the cameras the run held out)", true},
       {"masks", "DIR", "true silhouettes DIR/<cam>/<frame>.png (default: the run's masks)"},
       {"gt-meshes", "DIR", "ground-truth meshes DIR/<frame>.ply with the scan's topology: vertex error"},
       {"background", "plate|black", "what the rendered views are seen over (default plate: the held-out camera's clean plate)"},

@@ -12,8 +12,9 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "app/frame_range.h"
-#include "app/run_folder.h"
+#include "pipeline/frame_range.h"
+#include "pipeline/finished_run.h"
+#include "pipeline/run_folder.h"
 #include "app/texture_args.h"
 #include "calib/capture.h"
 #include "calib/easymocap_io.h"
@@ -60,8 +61,8 @@ Camera Resized(const Camera& camera, int width, int height) {
 }
 
 int RunRender(const ParsedArgs& args, const Context& context) {
-  const std::string capture_root = args.positionals().at(0);
-  const RunFolder run{args.get("run")};
+  const FinishedRun finished = OpenFinishedRun(args.get("run"), args.positionals().empty() ? "" : args.positionals()[0]);
+  const RunFolder& run = finished.folder;
   const std::string out_dir = args.get("out");
   const std::string geometry = args.get("geometry", "scan");
   if (geometry != "scan" && geometry != "template")
@@ -73,19 +74,21 @@ int RunRender(const ParsedArgs& args, const Context& context) {
     throw UsageError("--width and --height: give both, each in 1..8192");
   const bool write_mp4 = args.has("mp4");
   VideoWriterOptions video_options;
-  video_options.fps = args.get_double("fps", 25.0);
+  video_options.fps = args.get_double("fps", finished.fps());
   video_options.Check();
   const ProjectiveTextureOptions texture_options = TextureOptionsFromArgs(args);
 
   CaptureOptions capture_options;
   capture_options.check_every_image_header = false;
-  const Capture capture = Capture::Open(capture_root, capture_options);
+  const Capture capture = Capture::Open(finished.capture_root, capture_options);
   const Rig& rig = capture.rig();
   const FrameRange range = ParseFrameRange(args.get("frames"), capture.num_frames());
 
-  // Texturing cameras.
-  const std::vector<std::string> excluded = args.get_all("exclude-camera");
-  for (const std::string& name : excluded) rig.Get(name);  // UsageError listing the known names
+  // Texturing cameras: never the ones the run held out, unless asked.
+  std::string held_out_warning;
+  const std::vector<std::string> excluded = TexturingExclusions(finished, rig, args.get_all("exclude-camera"),
+                                                                args.has("texture-from-held-out"), &held_out_warning);
+  if (!held_out_warning.empty()) std::fprintf(stderr, "confluent render: warning: %s\n", held_out_warning.c_str());
   std::vector<int> used;
   std::vector<Camera> used_cameras;
   for (int c = 0; c < rig.size(); ++c)
@@ -93,7 +96,6 @@ int RunRender(const ParsedArgs& args, const Context& context) {
       used.push_back(c);
       used_cameras.push_back(rig.cameras[c]);
     }
-  if (used.empty()) throw UsageError("--exclude-camera: no camera is left for texturing");
 
   // Geometry present in the run.
   auto mesh_path = [&](int frame) { return geometry == "scan" ? run.ScanPath(frame) : run.TemplatePath(frame); };
@@ -283,7 +285,7 @@ CommandSpec MakeRenderCommand() {
   CommandSpec spec;
   spec.name = "render";
   spec.summary = "render novel views of a run's 3D video (projective texturing) to images and MP4";
-  spec.usage = "CAPTURE --run RUN --out DIR [--path orbit|cameras:A,B,..|fixed:NAME|fixed:CALIB_DIR/NAME|bullet:FRAME] [options]";
+  spec.usage = "[CAPTURE] --run RUN --out DIR [--path orbit|cameras:A,B,..|fixed:NAME|fixed:CALIB_DIR/NAME|bullet:FRAME] [options]";
   spec.description =
       "Textures the run's animated scan (RUN/scan/<frame>.ply; --geometry template for RUN/template/) from\n"
       "the capture's camera images: per-camera visibility from depth maps, unstructured-lumigraph weights\n"
@@ -295,19 +297,21 @@ CommandSpec MakeRenderCommand() {
       "intri.yml/extri.yml, e.g. a held-out camera), bullet:FRAME (frozen time, a sweep around the ring).\n"
       "--over-plate draws a capture camera's fixed view over its clean plate with the input cameras'\n"
       "colours matched to it (as `confluent evaluate` scores held-out views).\n"
-      "Frames without geometry are skipped and listed.";
-  spec.min_positionals = 1;
+      "Frames without geometry are skipped and listed. CAPTURE defaults to the one RUN/run.json names; the\n"
+      "cameras the run held out never texture the view unless --texture-from-held-out is given.";
+  spec.min_positionals = 0;
   spec.max_positionals = 1;
   spec.options = {
       {"run", "RUN", "the run folder (scan/, template/, masks/)", false, true},
       {"out", "DIR", "output folder (e.g. RUN/renders)", false, true},
       {"path", "PATH", "orbit (default), cameras:A,B,..., fixed:NAME, fixed:CALIB_DIR/NAME or bullet:FRAME"},
       {"geometry", "scan|template", "which meshes to texture (default scan)"},
-      {"exclude-camera", "NAME", "do not texture from this camera", true},
+      {"exclude-camera", "NAME", "do not texture from this camera (the run's held-out cameras never do)", true},
+      {"texture-from-held-out", "", "texture from the cameras the run held out too (prints a warning)"},
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
       {"format", "png|exr", "image format (default png)"},
       {"mp4", "", "also write DIR/<view>.mp4 (needs ffmpeg)"},
-      {"fps", "F", "video frame rate (default 25)"},
+      {"fps", "F", "video frame rate (default: the run's, else 25)"},
       {"width", "W", "output width (with --height; default: the cameras' size)"},
       {"height", "H", "output height"},
       {"path-frames", "N", "cameras on the path (default: one per frame; bullet time: 60)"},

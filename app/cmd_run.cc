@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.h"
-#include "app/run_json.h"
-#include "app/run_stages.h"
+#include "pipeline/run_manifest.h"
+#include "pipeline/run_stages.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/mesh_io.h"
@@ -48,32 +48,32 @@ nlohmann::json InputChecksums(const Capture& capture, const RunInputs& inputs) {
 }
 
 // Writes run.json, or checks that an existing one describes the same inputs.
-void RecordRun(const RunInputs& inputs, const ParsedArgs& args, const nlohmann::json& checksums,
-               const std::vector<std::string>& excluded_names) {
-  const std::string path = inputs.folder.Path("run.json");
+void RecordRun(const RunInputs& inputs, const ParsedArgs& args, const nlohmann::json& checksums) {
+  const std::string path = RunManifestPath(inputs.folder.root);
   if (fs::exists(path)) {
-    const RunRecord previous = ReadRunRecord(path);
+    const RunManifest previous = ReadRunManifest(path);
     if (previous.input_checksums != checksums)
       throw InputError(path, "this run folder was made from other inputs (calibration, scan or correspondences differ); "
                              "use a new --out folder");
-    if (previous.excluded_cameras != excluded_names)
+    if (previous.held_out_cameras != inputs.cameras.held_out_names())
       throw InputError(path, "this run folder was made with other --exclude-camera names; use a new --out folder");
+    if (previous.fps > 0 && previous.fps != inputs.fps)
+      throw InputError(path, "this run folder was made at " + std::to_string(previous.fps) +
+                                 " fps; give the same --fps or use a new --out folder");
     return;
   }
-  nlohmann::json json;
-  json["format"] = "confluent.run/1";
-  json["version"] = CONFLUENT_VERSION;
-  json["capture"] = fs::absolute(inputs.capture->root()).string();
-  json["scan"] = inputs.scan_path.empty() ? "" : fs::absolute(inputs.scan_path).string();
-  json["correspondences"] = inputs.correspondences_path.empty() ? "automatic" : fs::absolute(inputs.correspondences_path).string();
-  json["masks"] = inputs.masks_dir.empty() ? "extracted" : fs::absolute(inputs.masks_dir).string();
-  json["excluded_cameras"] = excluded_names;
-  json["frames"] = {inputs.frames.first, inputs.frames.end};
-  nlohmann::json options;
-  for (const auto& [name, values] : args.values_) options[name] = values;
-  json["options"] = options;
-  json["input_checksums"] = checksums;
-  WriteTextFile(path, json.dump(1) + "\n");
+  RunManifest manifest;
+  manifest.version = CONFLUENT_VERSION;
+  manifest.capture = fs::absolute(inputs.capture->root()).string();
+  manifest.scan = inputs.scan_path.empty() ? "" : fs::absolute(inputs.scan_path).string();
+  if (!inputs.correspondences_path.empty()) manifest.correspondences = fs::absolute(inputs.correspondences_path).string();
+  if (!inputs.masks_dir.empty()) manifest.masks = fs::absolute(inputs.masks_dir).string();
+  manifest.held_out_cameras = inputs.cameras.held_out_names();
+  manifest.frames = inputs.frames;
+  manifest.fps = inputs.fps;
+  for (const auto& [name, values] : args.values_) manifest.options[name] = values;
+  manifest.input_checksums = checksums;
+  WriteRunManifest(path, manifest);
 }
 
 // Reads the scan, refusing before any work one the deformation cannot animate well: unreadable,
@@ -116,15 +116,11 @@ int RunRun(const ParsedArgs& args, const Context& context) {
   inputs.capture = &capture;
   inputs.folder.root = args.get("out");
   inputs.frames = ParseFrameRange(args.get("frames"), capture.num_frames());
-  inputs.excluded.assign(rig.size(), false);
-  std::vector<std::string> excluded_names = args.get_all("exclude-camera");
-  for (const std::string& name : excluded_names) {
-    rig.Get(name);  // throws UsageError listing the known names
-    inputs.excluded[rig.IndexOf(name)] = true;
-  }
-  std::sort(excluded_names.begin(), excluded_names.end());
-  if (std::count(inputs.excluded.begin(), inputs.excluded.end(), false) < 2)
-    throw UsageError("--exclude-camera: at least 2 cameras must remain for tracking");
+  inputs.cameras = CameraSelection(rig, args.get_all("exclude-camera"));
+  inputs.cameras.RequireUsed(2, "--exclude-camera");
+  const double fps = args.get_double("fps", 0.0);
+  if (args.has("fps") && !(fps > 0.0 && fps <= 1000.0)) throw UsageError("--fps: must be within (0, 1000]");
+  inputs.fps = RunFrameRate(capture, fps);
   inputs.masks_dir = args.get("masks");
   if (!inputs.masks_dir.empty() && !fs::is_directory(inputs.masks_dir)) throw InputError(inputs.masks_dir, "masks folder not found");
   inputs.scan_path = args.has("no-scan") ? "" : args.get("scan", capture.scan_path());
@@ -151,7 +147,7 @@ int RunRun(const ParsedArgs& args, const Context& context) {
 
   fs::create_directories(inputs.folder.root);
   const int stale_temporaries = RemoveStaleTemporaries(inputs.folder.root);
-  RecordRun(inputs, args, InputChecksums(capture, inputs), excluded_names);
+  RecordRun(inputs, args, InputChecksums(capture, inputs));
   // A shard keeps its own log, so that shards running at the same time do not overwrite each other's rows.
   const std::string timings_path =
       inputs.folder.Path(args.has("frames") ? "timings_frames_" + std::to_string(inputs.frames.first) + "-" +
@@ -159,7 +155,7 @@ int RunRun(const ParsedArgs& args, const Context& context) {
                                             : "timings.csv");
   TimingLog timings(timings_path);
   std::printf("run %s: %d cameras (%zu held out), frames %d:%d, %s\n", inputs.folder.root.c_str(), rig.size(),
-              excluded_names.size(), inputs.frames.first, inputs.frames.end,
+              inputs.cameras.held_out_names().size(), inputs.frames.first, inputs.frames.end,
               inputs.scan_path.empty() ? "no scan (template 3D video)" : ("scan " + inputs.scan_path).c_str());
   if (stale_temporaries > 0)
     std::printf("removed %d temporary file(s) left by an interrupted run\n", stale_temporaries);
@@ -213,6 +209,7 @@ CommandSpec MakeRunCommand() {
       {"render-width", "PX", "width of the orbit video (default 960)"},
       {"render-height", "PX", "height of the orbit video (default 720)"},
       {"threads", "N", "worker threads (default 2)"},
+      {"fps", "F", "frame rate of poses.json, motion.bvh and the videos (default: the capture's videos', else 25)"},
   };
   spec.run = RunRun;
   return spec;

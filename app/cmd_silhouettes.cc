@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.h"
-#include "app/frame_range.h"
+#include "pipeline/frame_range.h"
 #include "calib/capture.h"
 #include "core/atomic_file.h"
 #include "core/error.h"

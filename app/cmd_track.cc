@@ -9,7 +9,9 @@
 #include <numeric>
 
 #include "app/commands.h"
-#include "app/frame_range.h"
+#include "pipeline/camera_selection.h"
+#include "pipeline/frame_range.h"
+#include "pipeline/run_manifest.h"
 #include "calib/capture.h"
 #include "calib/rig_check.h"
 #include "core/atomic_file.h"
@@ -70,11 +72,8 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
   capture_options.check_every_image_header = false;
   const Capture capture = Capture::Open(root, capture_options);
   const Rig& rig = capture.rig();
-  std::vector<bool> excluded(rig.size(), false);
-  for (const std::string& name : args.get_all("exclude-camera")) {
-    rig.Get(name);  // throws UsageError listing the known names
-    excluded[rig.IndexOf(name)] = true;
-  }
+  const CameraSelection cameras(rig, args.get_all("exclude-camera"));
+  const std::vector<bool>& excluded = cameras.held_out_mask();
   const std::string masks_dir = args.get("masks", (fs::path(root) / "masks").string());
   if (!fs::is_directory(masks_dir))
     throw InputError(masks_dir, "no masks folder (run `confluent silhouettes` first, or pass --masks DIR)");
@@ -169,7 +168,7 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
     results.push_back(std::move(result));
     ReportProgress(progress, "track", frame - first + 1, end - first, "frame " + std::to_string(frame));
   }
-  const double fps = 25.0;
+  const double fps = RunFrameRate(capture);
   WritePosesJson((fs::path(out_dir) / "poses.json").string(), body, tracker.shape(), rig.names(), results, fps);
   WriteBvh((fs::path(out_dir) / "motion.bvh").string(), body.MakeSkeleton(tracker.shape()), poses, 1.0 / fps);
   WriteTextFile((fs::path(out_dir) / "overlap.csv").string(), overlap_csv);

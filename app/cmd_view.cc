@@ -16,9 +16,10 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "app/frame_range.h"
+#include "pipeline/frame_range.h"
 #include "app/view_state.h"
 #include "app/viewer_run.h"
+#include "pipeline/run_manifest.h"
 #include "calib/capture.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -319,10 +320,9 @@ int RunView(const ParsedArgs& args, const Context&) {
   ParseSize(args.get("size", "960x720"), &width, &height);
   const int exit_after = args.get_int("exit-after-frames", 0);
   if (exit_after < 0) throw UsageError("--exit-after-frames: must be >= 0");
-  const double fps = args.get_double("fps", 25.0);
-  if (!(fps > 0.0 && fps <= 240.0)) throw UsageError("--fps: must be in (0, 240]");
-
   const ViewerRun run = OpenViewerRun(args.positionals()[0], args.get("capture"));
+  const double fps = args.get_double("fps", run.fps > 0.0 ? run.fps : kAssumedFrameRate);
+  if (!(fps > 0.0 && fps <= 240.0)) throw UsageError("--fps: must be in (0, 240]");
   FrameCache frames(&run, 8);
   CaptureState capture = OpenCaptureFor(run);
 
@@ -459,7 +459,7 @@ CommandSpec MakeViewCommand() {
       {"elevation", "DEG", "initial view elevation (default 15)"},
       {"zoom", "F", "initial view distance times F (default 1; 3 shows a camera ring)"},
       {"size", "WxH", "window size in pixels (default 960x720)"},
-      {"fps", "F", "playback rate (default 25)"},
+      {"fps", "F", "playback rate (default: the run's, else 25)"},
       {"play", "", "start playing"},
       {"exit-after-frames", "K", "quit after drawing K frames (scripted smoke tests)"},
   };

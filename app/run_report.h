@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "app/run_folder.h"
+#include "pipeline/run_folder.h"
 #include "calib/camera.h"
 
 #include <nlohmann/json.hpp>

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "app/frame_range.h"
+#include "pipeline/frame_range.h"
 #include "app/view_state.h"
 #include "core/error.h"
 #include "core/image_io.h"

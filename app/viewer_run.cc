@@ -3,12 +3,11 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
-#include <nlohmann/json.hpp>
 
-#include "app/frame_range.h"
-#include "core/atomic_file.h"
+#include "pipeline/frame_range.h"
 #include "core/error.h"
 #include "core/mesh_io.h"
+#include "pipeline/run_manifest.h"
 
 namespace confluent::app {
 namespace fs = std::filesystem;
@@ -44,19 +43,13 @@ ViewerRun OpenViewerRun(const std::string& root, const std::string& capture_over
   if (!fs::is_directory(root, ec)) throw InputError(root, "not a folder (expected a run folder made by confluent run)");
   ViewerRun run;
   run.root = root;
-  const fs::path json_path = fs::path(root) / "run.json";
+  const std::string json_path = RunManifestPath(root);
   if (!fs::exists(json_path, ec))
     throw InputError(root, "not a run folder: no run.json (make one with: confluent run CAPTURE --out RUN)");
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(ReadTextFile(json_path.string()));
-    if (!json.is_object()) throw InputError(json_path.string(), "not a run.json: expected a JSON object");
-    if (json.contains("capture") && json["capture"].is_string()) run.capture = json["capture"].get<std::string>();
-    if (json.contains("excluded_cameras"))
-      run.excluded_cameras = json["excluded_cameras"].get<std::vector<std::string>>();
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(json_path.string(), std::string("not a run.json: ") + e.what());
-  }
+  const RunManifest manifest = ReadRunManifest(json_path);
+  run.capture = manifest.capture;
+  run.excluded_cameras = manifest.held_out_cameras;
+  run.fps = manifest.fps;
   if (!capture_override.empty()) run.capture = capture_override;
 
   for (const char* kind : {"scan", "template"}) {
@@ -72,14 +65,9 @@ ViewerRun OpenViewerRun(const std::string& root, const std::string& capture_over
   run.first_frame = run.present.front();
   run.last_frame = run.present.back();
   // run.json's frame range [A, B) shows frames that were never written as missing.
-  const auto frames = json.find("frames");
-  if (frames != json.end() && frames->is_array() && frames->size() == 2 && (*frames)[0].is_number_integer() &&
-      (*frames)[1].is_number_integer()) {
-    const int first = (*frames)[0].get<int>(), end = (*frames)[1].get<int>();
-    if (first >= 0 && end > first && end - first < 1000000) {
-      run.first_frame = std::min(run.first_frame, first);
-      run.last_frame = std::max(run.last_frame, end - 1);
-    }
+  if (manifest.frames.size() > 0 && manifest.frames.size() < 1000000) {
+    run.first_frame = std::min(run.first_frame, manifest.frames.first);
+    run.last_frame = std::max(run.last_frame, manifest.frames.end - 1);
   }
   return run;
 }

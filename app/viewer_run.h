@@ -22,6 +22,7 @@ struct ViewerRun {
   std::vector<int> present;                 // frames with a mesh file, ascending
   std::string capture;                      // capture folder ("" = none known)
   std::vector<std::string> excluded_cameras;  // cameras not used for texturing
+  double fps = 0.0;                         // the run's frame rate (0: not recorded)
 
   int num_frames() const { return last_frame - first_frame + 1; }
   bool has_frame(int frame) const;

@@ -138,6 +138,7 @@ Capture Capture::Open(const std::string& root_path, const CaptureOptions& option
       VideoReader reader(path);
       CheckSize(path, reader.width(), reader.height(), rig.cameras[c]);
       counts[c] = reader.num_frames();
+      if (c == 0 && reader.fps() > 0 && reader.fps() <= 1000) capture.frame_rate_ = reader.fps();
       capture.video_paths_.push_back(path);
     }
   } else {

@@ -1,5 +1,5 @@
 #pragma once
-// The recorded camera folder (DESIGN.md section 3): calibration, frames, plates, masks.
+// The recorded camera folder (docs/ARCHITECTURE.md section 3): calibration, frames, plates, masks.
 
 #include <memory>
 #include <string>
@@ -41,6 +41,8 @@ class Capture {
   int num_cameras() const { return rig_.size(); }
   int num_frames() const { return num_frames_; }
   FrameSource source() const { return source_; }
+  // Frames per second as the first camera's video file states it; 0 for images/ (unknown).
+  double frame_rate() const { return frame_rate_; }
 
   // Path of frame `frame` of camera `camera` (images/ layout; for videos the video path).
   std::string FramePath(int camera, int frame) const;
@@ -65,6 +67,7 @@ class Capture {
   std::string root_;
   Rig rig_;
   int num_frames_ = 0;
+  double frame_rate_ = 0.0;
   FrameSource source_ = FrameSource::kImages;
   std::vector<std::vector<std::string>> frame_paths_;  // [camera][frame], images only
   std::vector<std::string> video_paths_;               // [camera], videos only

@@ -1,8 +1,8 @@
 #pragma once
 // Colour response between two cameras of a rig, measured on their clean plates: both see the
-// same floor (world z = 0, DESIGN.md), so where they see the same floor point their plate colours
-// differ by the cameras' gains (white balance, exposure). Used to render a view with the colour
-// response of a real camera (held-out evaluation).
+// same floor (world z = 0, docs/ARCHITECTURE.md section 3), so where they see the same floor
+// point their plate colours differ by the cameras' gains (white balance, exposure). Used to
+// render a view with the colour response of a real camera (held-out evaluation).
 
 #include <Eigen/Core>
 #include <optional>

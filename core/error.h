@@ -1,5 +1,5 @@
 #pragma once
-// Typed exceptions for bad external input (DESIGN.md section 6). Only app/ catches them.
+// Typed exceptions for bad external input (docs/ARCHITECTURE.md section 6). Only app/ catches them.
 
 #include <stdexcept>
 #include <string>
@@ -37,5 +37,9 @@ class UsageError : public Error {
  public:
   using Error::Error;
 };
+
+// For Options::Check(): throws UsageError "<field> = <value>: must be <rule>" unless `ok`,
+// e.g. RequireOption(iterations >= 0, "SilhouetteRefinementOptions.iterations", iterations, ">= 0").
+void RequireOption(bool ok, const std::string& field, double value, const std::string& rule);
 
 }  // namespace confluent

@@ -19,9 +19,13 @@ namespace confluent {
 
 void ConfluentMotionOptions::Check() const {
   laplacian.Check();
-  if (!(singular_w >= 0.0 && singular_w < 1.0) || max_segment_fields < 1 || !(segment_rigid_tolerance_rad >= 0.0) ||
-      !(position_weight >= 0.0) || threads < 1)
-    std::abort();
+  const std::string owner = "ConfluentMotionOptions.";
+  RequireOption(singular_w >= 0.0 && singular_w < 1.0, owner + "singular_w", singular_w, "in [0, 1)");
+  RequireOption(max_segment_fields >= 1, owner + "max_segment_fields", max_segment_fields, ">= 1");
+  RequireOption(segment_rigid_tolerance_rad >= 0.0, owner + "segment_rigid_tolerance_rad", segment_rigid_tolerance_rad,
+                ">= 0");
+  RequireOption(position_weight >= 0.0, owner + "position_weight", position_weight, ">= 0");
+  RequireOption(threads >= 1, owner + "threads", threads, ">= 1");
 }
 
 namespace confluent_motion_internal {

@@ -55,7 +55,7 @@ struct ConfluentMotionOptions {
   // reproduced to round-off). The Poisson factor stays double without positional constraints
   // (position_weight = 0), whose system is much worse conditioned.
   bool single_precision_solves = false;
-  void Check() const;  // aborts on invalid values
+  void Check() const;  // throws UsageError naming an invalid field and its value
 };
 
 // What the constructor found and did.

@@ -125,7 +125,9 @@ std::vector<std::string> SegmentsWithoutPairs(const Correspondences& corresponde
 }
 
 void AugmentOptions::Check() const {
-  if (directions < 1 || !(neighbourhood_radius_m > 0.0) || !(max_radius_factor > 1.0)) std::abort();
+  RequireOption(directions >= 1, "AugmentOptions.directions", directions, ">= 1");
+  RequireOption(neighbourhood_radius_m > 0.0, "AugmentOptions.neighbourhood_radius_m", neighbourhood_radius_m, "> 0");
+  RequireOption(max_radius_factor > 1.0, "AugmentOptions.max_radius_factor", max_radius_factor, "> 1");
 }
 
 namespace {

@@ -1,6 +1,7 @@
 #pragma once
-// Template <-> scan triangle correspondences (DESIGN.md section 3): file I/O, validation and the
-// automatic augmentation of cylindrical parts (de Aguiar et al. 2006, section 4.2).
+// Template <-> scan triangle correspondences (docs/ARCHITECTURE.md section 3): file I/O,
+// validation and the automatic augmentation of cylindrical parts (de Aguiar et al. 2006,
+// section 4.2).
 
 #include <string>
 #include <vector>
@@ -51,7 +52,7 @@ struct AugmentOptions {
                                           // the part's axis (normal PCA) and cross-section centre
   double max_radius_factor = 3.0;        // a hit farther from the axis than this times the
                                           // estimated part radius is rejected
-  void Check() const;  // aborts on invalid values
+  void Check() const;  // throws UsageError naming an invalid field and its value
 };
 
 // Automatic augmentation for cylindrical parts (report section 4.2). For each given pair it

@@ -8,10 +8,13 @@
 #include <numeric>
 #include <vector>
 
+#include "core/error.h"
+
 namespace confluent {
 
 void CotanLaplacianOptions::Check() const {
-  if (!(mollify_factor >= 0.0 && mollify_factor < 1.0)) std::abort();
+  RequireOption(mollify_factor >= 0.0 && mollify_factor < 1.0, "CotanLaplacianOptions.mollify_factor", mollify_factor,
+                "in [0, 1)");
 }
 
 namespace {

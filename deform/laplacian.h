@@ -18,7 +18,7 @@ struct CotanLaplacianOptions {
   // triangle's stiffness matrix stays positive semi-definite. 0 disables mollification
   // (degenerate triangles then get zero weights).
   double mollify_factor = 1e-4;
-  void Check() const;  // aborts on invalid values
+  void Check() const;  // throws UsageError naming an invalid field and its value
 };
 
 // Per-face half cotangent weights, m x 3: entry (f, k) is 1/2 cot of the (mollified) angle at

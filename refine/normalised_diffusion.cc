@@ -1,7 +1,6 @@
 #include "refine/normalised_diffusion.h"
 
 #include <Eigen/SparseCore>
-#include <cstdlib>
 #include <stdexcept>
 
 #include "core/error.h"
@@ -17,7 +16,7 @@ struct NormalisedDiffusion::Impl {
 
 NormalisedDiffusion::NormalisedDiffusion(const Mesh& mesh, double stiffness, const std::string& source)
     : impl_(std::make_unique<Impl>()) {
-  if (!(stiffness > 0.0)) std::abort();
+  RequireOption(stiffness > 0.0, "NormalisedDiffusion stiffness", stiffness, "> 0");
   if (mesh.num_faces() == 0) throw InputError(source, "diffusion over the surface: the mesh has no faces");
   const Eigen::SparseMatrix<double> laplacian = CotanLaplacian(mesh.vertices, mesh.faces);
   impl_->gamma = stiffness * laplacian.diagonal().mean();

@@ -18,11 +18,20 @@
 namespace confluent {
 
 void PhotoRefinementOptions::Check() const {
-  if (rounds < 0 || neighbours < 1 || !(step_gain > 0.0) || !(spread_stiffness > 0.0) || !(fade_weight > 0.0) ||
-      !(min_view_cosine >= 0.0 && min_view_cosine < 1.0) || !(max_flow_px > 0.0) || !(max_ray_gap_m > 0.0) ||
-      !(max_offset_m > 0.0) || !(visibility_tolerance_m > 0.0) || outline_margin_px < 0 || flow_finest_scale < 0 ||
-      threads < 1)
-    std::abort();
+  const std::string owner = "PhotoRefinementOptions.";
+  RequireOption(rounds >= 0, owner + "rounds", rounds, ">= 0");
+  RequireOption(neighbours >= 1, owner + "neighbours", neighbours, ">= 1");
+  RequireOption(step_gain > 0.0, owner + "step_gain", step_gain, "> 0");
+  RequireOption(spread_stiffness > 0.0, owner + "spread_stiffness", spread_stiffness, "> 0");
+  RequireOption(fade_weight > 0.0, owner + "fade_weight", fade_weight, "> 0");
+  RequireOption(min_view_cosine >= 0.0 && min_view_cosine < 1.0, owner + "min_view_cosine", min_view_cosine, "in [0, 1)");
+  RequireOption(max_flow_px > 0.0, owner + "max_flow_px", max_flow_px, "> 0");
+  RequireOption(max_ray_gap_m > 0.0, owner + "max_ray_gap_m", max_ray_gap_m, "> 0");
+  RequireOption(max_offset_m > 0.0, owner + "max_offset_m", max_offset_m, "> 0");
+  RequireOption(visibility_tolerance_m > 0.0, owner + "visibility_tolerance_m", visibility_tolerance_m, "> 0");
+  RequireOption(outline_margin_px >= 0, owner + "outline_margin_px", outline_margin_px, ">= 0");
+  RequireOption(flow_finest_scale >= 0, owner + "flow_finest_scale", flow_finest_scale, ">= 0");
+  RequireOption(threads >= 1, owner + "threads", threads, ">= 1");
 }
 
 namespace {

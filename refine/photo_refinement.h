@@ -40,7 +40,7 @@ struct PhotoRefinementOptions {
   int flow_finest_scale = 1;
   int outline_margin_px = 3;    // pixels this close to the scan's outline in a camera are not used
   int threads = 2;              // camera pairs processed in parallel
-  void Check() const;           // aborts on invalid values
+  void Check() const;           // throws UsageError naming an invalid field and its value
 };
 
 // What one Refine() call did.

@@ -15,9 +15,14 @@
 namespace confluent {
 
 void SilhouetteRefinementOptions::Check() const {
-  if (iterations < 0 || !(search_px > 0.0) || !(max_rim_cosine > 0.0 && max_rim_cosine < 1.0) ||
-      !(spread_stiffness > 0.0) || !(fade_weight > 0.0) || !(step_gain > 0.0) || threads < 1)
-    std::abort();
+  const std::string owner = "SilhouetteRefinementOptions.";
+  RequireOption(iterations >= 0, owner + "iterations", iterations, ">= 0");
+  RequireOption(search_px > 0.0, owner + "search_px", search_px, "> 0");
+  RequireOption(max_rim_cosine > 0.0 && max_rim_cosine < 1.0, owner + "max_rim_cosine", max_rim_cosine, "in (0, 1)");
+  RequireOption(spread_stiffness > 0.0, owner + "spread_stiffness", spread_stiffness, "> 0");
+  RequireOption(fade_weight > 0.0, owner + "fade_weight", fade_weight, "> 0");
+  RequireOption(step_gain > 0.0, owner + "step_gain", step_gain, "> 0");
+  RequireOption(threads >= 1, owner + "threads", threads, ">= 1");
 }
 
 namespace {

@@ -37,7 +37,7 @@ struct SilhouetteRefinementOptions {
   // taken back and made at half the gain, which stays halved (a backtracking line search).
   double step_gain = 2.0;
   int threads = 2;             // cameras examined in parallel
-  void Check() const;          // aborts on invalid values
+  void Check() const;          // throws UsageError naming an invalid field and its value
 };
 
 // What one Refine() call did.

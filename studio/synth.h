@@ -1,6 +1,7 @@
 #pragma once
 // `confluent synth`: renders a synthetic multi-camera capture of an actor in the studio, in the
-// recorded camera folder layout (DESIGN.md section 3), plus a separate ground-truth folder.
+// recorded camera folder layout (docs/ARCHITECTURE.md section 3), plus a separate ground-truth
+// folder.
 //
 // Capture folder:  intri.yml, extri.yml (every camera, held-out ones included),
 //                  images/<cam>/000000.png ..., background/<cam>.png (clean plates), scan.ply.

@@ -12,6 +12,7 @@
 #include "core/image_io.h"
 #include "core/mesh_io.h"
 #include "core/mesh_ops.h"
+#include "pipeline/run_manifest.h"
 #include "tests/app/capture_fixture.h"
 #include "tests/support/test_support.h"
 
@@ -100,6 +101,37 @@ TEST(RenderCommand, FixedCameraReproducesItsImageAndBulletTimeFreezesAFrame) {
 
 // --over-plate: the fixed view of a capture camera over its clean plate, the input colours
 // matched to it. Plain-colour plates make the floor ratio (and so the gains) known exactly.
+// A run that held out cam01: its fixed view of cam01 is textured from the other cameras only,
+// the same image as with --exclude-camera cam01, and the capture comes from run.json. Texturing
+// from the held-out camera itself needs --texture-from-held-out and warns.
+TEST(RenderCommand, TheRunsHeldOutCamerasNeverTextureItsViewsUnlessAsked) {
+  RenderFixture f;
+  RunManifest manifest;
+  manifest.capture = fs::absolute(f.capture).string();
+  manifest.held_out_cameras = {"cam01"};
+  manifest.frames = {0, 5};
+  WriteRunManifest(RunManifestPath(f.run), manifest);
+  const std::vector<std::string> view = {"--path", "fixed:cam01", "--frames", "1:2"};
+  auto render = [&](std::vector<std::string> args) {
+    args.insert(args.end(), view.begin(), view.end());
+    const testing::CommandResult result = testing::RunConfluent(args);
+    EXPECT_EQ(result.exit_code, 0) << result.stderr_text;
+    return result;
+  };
+  const testing::CommandResult from_run = render({"render", "--run", f.run, "--out", f.dir / "from_run"});
+  EXPECT_EQ(from_run.stderr_text.find("warning"), std::string::npos) << from_run.stderr_text;
+  render({"render", f.capture, "--run", f.run, "--out", f.dir / "excluded", "--exclude-camera", "cam01"});
+  const testing::CommandResult self =
+      render({"render", "--run", f.run, "--out", f.dir / "self", "--texture-from-held-out"});
+  EXPECT_NE(self.stderr_text.find("warning: texturing from camera(s) the run held out (cam01)"), std::string::npos)
+      << self.stderr_text;
+  const Image a = ReadImage(f.dir / "from_run/cam01/000001.png");
+  const Image b = ReadImage(f.dir / "excluded/cam01/000001.png");
+  const Image c = ReadImage(f.dir / "self/cam01/000001.png");
+  EXPECT_EQ(a.data, b.data);
+  EXPECT_NE(a.data, c.data);
+}
+
 TEST(RenderCommand, OverPlateComposesOverTheCleanPlateAndMatchesColours) {
   RenderFixture f;
   const Camera camera = ReadEasyMocap(f.capture + "/intri.yml", f.capture + "/extri.yml").Get("cam01");
@@ -155,9 +187,17 @@ TEST(RenderCommand, BadInputFails) {
       testing::RunConfluent({"render", f.capture, "--run", f.run, "--out", f.dir / "o", "--path", "spiral"});
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_NE(result.stderr_text.find("--path"), std::string::npos) << result.stderr_text;
+  fs::create_directories(f.dir / "empty_run");
   result = testing::RunConfluent({"render", f.capture, "--run", f.dir / "empty_run", "--out", f.dir / "o"});
   EXPECT_EQ(result.exit_code, 1);
   EXPECT_NE(result.stderr_text.find("scan"), std::string::npos) << result.stderr_text;
+  result = testing::RunConfluent({"render", f.capture, "--run", f.dir / "no_such_run", "--out", f.dir / "o"});
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.stderr_text.find("no_such_run: run folder not found"), std::string::npos) << result.stderr_text;
+  // Without CAPTURE, the run must name one in its run.json.
+  result = testing::RunConfluent({"render", "--run", f.run, "--out", f.dir / "o"});
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.stderr_text.find("CAPTURE: not given"), std::string::npos) << result.stderr_text;
   result = testing::RunConfluent(
       {"render", f.capture, "--run", f.run, "--out", f.dir / "o", "--exclude-camera", "nosuchcamera"});
   EXPECT_EQ(result.exit_code, 2);

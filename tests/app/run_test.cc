@@ -186,15 +186,18 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
   // the union's PSNR moves, the PSNR inside both silhouettes does not.
   EXPECT_EQ(metrics["background"], "clean plate");
   EXPECT_EQ(metrics["colour_matched"], true);
+  // From here on without CAPTURE and --heldout: run.json records both.
   auto evaluate_with = [&](const std::vector<std::string>& options) {
-    std::vector<std::string> args = {"evaluate", Capture(), "--run", run, "--heldout", "holdout0", "--heldout", "holdout1",
-                                     "--masks", Truth() + "/masks", "--side-by-side-every", "0"};
+    std::vector<std::string> args = {"evaluate", "--run", run, "--masks", Truth() + "/masks", "--side-by-side-every", "0"};
     args.insert(args.end(), options.begin(), options.end());
     const testing::CommandResult result = RunConfluent(args);
     EXPECT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
     return nlohmann::json::parse(std::ifstream(run + "/metrics.json"));
   };
   EXPECT_EQ(metrics["edge_softness_px"], 0.5);
+  const nlohmann::json from_run = evaluate_with({"--gt-meshes", Truth() + "/meshes"});
+  EXPECT_EQ(from_run["rows"], metrics["rows"]);
+  EXPECT_EQ(from_run["scan"], metrics["scan"]);
   const nlohmann::json unmatched = evaluate_with({"--no-colour-match", "--edge-softness", "0"});
   EXPECT_EQ(unmatched["colour_matched"], false);
   EXPECT_GT(std::abs(unmatched["scan"]["psnr_inside_db_mean"].get<double>() - metrics["scan"]["psnr_inside_db_mean"].get<double>()), 1e-6);

@@ -1,10 +1,25 @@
 #pragma once
 // Helpers shared by the gtest suites: temporary folders, the confluent binary, shared data.
 
+#include <gtest/gtest.h>
+
 #include <string>
 #include <vector>
 
+#include "core/error.h"
+
 namespace confluent::testing {
+
+// Expects `options.Check()` to throw a UsageError whose message contains `expected`.
+template <typename Options>
+void ExpectCheckRefuses(const Options& options, const std::string& expected) {
+  try {
+    options.Check();
+    ADD_FAILURE() << "accepted; expected: " << expected;
+  } catch (const UsageError& error) {
+    EXPECT_NE(std::string(error.what()).find(expected), std::string::npos) << error.what();
+  }
+}
 
 // A fresh empty folder under the system temp dir, removed when the object dies.
 class TempDir {

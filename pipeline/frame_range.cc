@@ -1,10 +1,10 @@
-#include "app/frame_range.h"
+#include "pipeline/frame_range.h"
 
 #include <cstdio>
 
 #include "core/error.h"
 
-namespace confluent::app {
+namespace confluent {
 
 FrameRange ParseFrameRange(const std::string& text, int num_frames) {
   FrameRange range{0, num_frames};
@@ -40,4 +40,4 @@ std::string FrameStem(int frame) {
   return name;
 }
 
-}  // namespace confluent::app
+}  // namespace confluent

@@ -5,7 +5,7 @@
 #include <map>
 #include <mutex>
 
-#include "app/run_stages.h"
+#include "pipeline/run_stages.h"
 #include "core/bvh_io.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -14,7 +14,7 @@
 #include "tracking/motion_io.h"
 #include "tracking/tracker.h"
 
-namespace confluent::app {
+namespace confluent {
 namespace fs = std::filesystem;
 
 std::string RunMaskPath(const RunInputs& inputs, int camera, int frame) {
@@ -29,7 +29,7 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
   const Capture& capture = *inputs.capture;
   if (!inputs.masks_dir.empty()) {
     for (int c = 0; c < capture.num_cameras(); ++c)
-      if (!inputs.excluded[c] && !fs::exists(RunMaskPath(inputs, c, inputs.frames.first)))
+      if (inputs.cameras.is_used(c) && !fs::exists(RunMaskPath(inputs, c, inputs.frames.first)))
         throw InputError(RunMaskPath(inputs, c, inputs.frames.first), "mask file not found (given --masks folder)");
     report.skipped = inputs.frames.size();
     report.notes.push_back("masks given: " + inputs.masks_dir);
@@ -85,7 +85,7 @@ std::vector<Image> TrackingMasks(const RunInputs& inputs, int frame) {
   const Rig& rig = inputs.capture->rig();
   std::vector<Image> masks(rig.size());
   for (int c = 0; c < rig.size(); ++c) {
-    if (inputs.excluded[c]) continue;
+    if (inputs.cameras.is_held_out(c)) continue;
     const std::string path = RunMaskPath(inputs, c, frame);
     masks[c] = ReadMaskFile(path);
     if (masks[c].width != rig.cameras[c].width || masks[c].height != rig.cameras[c].height)
@@ -108,7 +108,7 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
   const std::vector<std::string> camera_names = rig.names();
   fs::create_directories(inputs.folder.Path("tracking"));
   fs::create_directories(inputs.folder.Path("template"));
-  Tracker tracker(rig, inputs.excluded);
+  Tracker tracker(rig, inputs.cameras.held_out_mask());
   auto read_state = [&](int frame) {
     PosesFile state = ReadPosesJson(inputs.folder.TrackingStatePath(frame), body, camera_names);
     if (state.frames.size() != 1) throw InputError(inputs.folder.TrackingStatePath(frame), "expected one frame");
@@ -143,7 +143,7 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
       throw InputError(RunMaskPath(inputs, 0, frame), "frame " + std::to_string(frame) +
                                                           ": no visual hull from the masks (empty or inconsistent masks)");
     WriteMesh(inputs.folder.TemplatePath(frame), body.PosedMesh(tracker.shape(), result.pose));
-    WritePosesJson(inputs.folder.TrackingStatePath(frame), body, tracker.shape(), camera_names, {result}, 25.0);
+    WritePosesJson(inputs.folder.TrackingStatePath(frame), body, tracker.shape(), camera_names, {result}, inputs.fps);
     timings->Add("tracking", frame, NowSeconds() - frame_start);
     for (const std::string& flag : result.flags)
       if (flag != "initialized") report.notes.push_back("frame " + std::to_string(frame) + ": " + flag);
@@ -162,11 +162,10 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
     if (frame == inputs.frames.first || frames.empty()) *shape = state.shape;
     frames.push_back(std::move(state.frames[0]));
   }
-  const double fps = 25.0;
-  WritePosesJson(inputs.folder.Path("poses.json"), body, *shape, camera_names, frames, fps);
+  WritePosesJson(inputs.folder.Path("poses.json"), body, *shape, camera_names, frames, inputs.fps);
   std::vector<Pose> poses;
   for (const TrackedFrame& f : frames) poses.push_back(body.ToPose(f.pose));
-  WriteBvh(inputs.folder.Path("motion.bvh"), body.MakeSkeleton(*shape), poses, 1.0 / fps);
+  WriteBvh(inputs.folder.Path("motion.bvh"), body.MakeSkeleton(*shape), poses, 1.0 / inputs.fps);
   double iou_sum = 0;
   for (const TrackedFrame& f : frames) iou_sum += f.mean_iou;
   report.notes.push_back("mean IoU on the tracking cameras " + std::to_string(iou_sum / std::max<std::size_t>(1, frames.size())).substr(0, 5) +
@@ -175,4 +174,4 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
   return report;
 }
 
-}  // namespace confluent::app
+}  // namespace confluent

@@ -1,10 +1,10 @@
 #pragma once
-// A run's output folder (DESIGN.md section 4): the paths of its files, and its timing log.
+// A run's output folder (docs/ARCHITECTURE.md section 4): the paths of its files, and its timing log.
 
 #include <string>
 #include <vector>
 
-namespace confluent::app {
+namespace confluent {
 
 // Paths inside a run folder. Frame files use six-digit stems (000042.ply).
 struct RunFolder {
@@ -51,4 +51,4 @@ class TimingLog {
 // A monotonic clock in seconds, for stage and frame timings.
 double NowSeconds();
 
-}  // namespace confluent::app
+}  // namespace confluent

@@ -3,7 +3,7 @@
 
 #include <string>
 
-namespace confluent::app {
+namespace confluent {
 
 // A half-open range of frame numbers [first, end).
 struct FrameRange {
@@ -21,4 +21,4 @@ FrameRange ParseFrameRange(const std::string& text, int num_frames);
 // "000042": the six-digit stem of a frame's files.
 std::string FrameStem(int frame);
 
-}  // namespace confluent::app
+}  // namespace confluent

@@ -6,7 +6,7 @@
 #include <memory>
 #include <filesystem>
 
-#include "app/run_stages.h"
+#include "pipeline/run_stages.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"
@@ -20,7 +20,7 @@
 #include "render/projective_texture.h"
 #include "tracking/scan_registration.h"
 
-namespace confluent::app {
+namespace confluent {
 namespace fs = std::filesystem;
 
 StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& body, const BodyShape& shape,
@@ -112,8 +112,8 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     }
     timings->Add("refine_factor", -1, NowSeconds() - refine_start);
     const Rig& rig = inputs.capture->rig();
-    for (int c = 0; c < rig.size(); ++c)
-      if (!inputs.excluded[c]) used_cameras.push_back(rig.cameras[c]), used_indices.push_back(c);
+    used_cameras = inputs.cameras.UsedCameras(rig);
+    used_indices = inputs.cameras.used();
   }
   double iou_before = 0.0, iou_after = 0.0;
   int iou_views = 0;
@@ -223,13 +223,8 @@ StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& op
   const bool use_scan = inputs.scan != nullptr;
   auto geometry_path = [&](int frame) { return use_scan ? folder.ScanPath(frame) : folder.TemplatePath(frame); };
 
-  std::vector<int> used;
-  std::vector<Camera> used_cameras;
-  for (int c = 0; c < rig.size(); ++c)
-    if (!inputs.excluded[c]) {
-      used.push_back(c);
-      used_cameras.push_back(rig.cameras[c]);
-    }
+  const std::vector<int> used = inputs.cameras.used();
+  const std::vector<Camera> used_cameras = inputs.cameras.UsedCameras(rig);
   OrbitPathOptions orbit = OrbitAroundCameras(used_cameras, RingCentre(used_cameras));
   orbit.num_frames = capture.num_frames();  // the whole capture is one turn, so shards agree
   orbit.width_px = options.width;
@@ -279,7 +274,7 @@ StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& op
                            " frame(s) of the capture not rendered yet: " + video + " is written once all are");
   } else if (report.computed > 0 || !fs::exists(video)) {
     VideoWriterOptions video_options;
-    video_options.fps = options.fps;
+    video_options.fps = inputs.fps;
     if (!FfmpegAvailable(video_options)) {
       report.notes.push_back("ffmpeg not found: no " + video + " (the PNG frames are written)");
     } else {
@@ -296,4 +291,4 @@ StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& op
   return report;
 }
 
-}  // namespace confluent::app
+}  // namespace confluent

@@ -6,21 +6,24 @@
 #include <string>
 #include <vector>
 
-#include "app/frame_range.h"
-#include "app/run_folder.h"
+#include "pipeline/frame_range.h"
+#include "pipeline/camera_selection.h"
+#include "pipeline/run_folder.h"
+#include "pipeline/run_manifest.h"
 #include "calib/capture.h"
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "tracking/body_template.h"
 
-namespace confluent::app {
+namespace confluent {
 
 // What every stage needs to know about the run.
 struct RunInputs {
   const Capture* capture = nullptr;
   RunFolder folder;
   FrameRange frames;                 // the frames of this invocation (a shard, or all)
-  std::vector<bool> excluded;        // per rig camera: held out, never used
+  CameraSelection cameras;           // used and held out (never used, masks only)
+  double fps = kAssumedFrameRate;    // of poses.json, motion.bvh and the videos
   std::string masks_dir;             // given masks (<dir>/<cam>/<frame>.png); empty: extract into the run
   std::string scan_path;             // empty: the 3D video uses the template
   const Mesh* scan = nullptr;        // the scan read from scan_path once (null without a scan)
@@ -67,7 +70,6 @@ struct RenderStageOptions {
   std::string view = "orbit";  // renders/<view>/
   int width = 960;
   int height = 720;
-  double fps = 25.0;
 };
 
 // The 3D video: an orbit around the actor, the scan (or the template without a scan)
@@ -75,4 +77,4 @@ struct RenderStageOptions {
 StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& options, const ProgressCallback& progress,
                            TimingLog* timings);
 
-}  // namespace confluent::app
+}  // namespace confluent

@@ -1,4 +1,4 @@
-#include "app/run_folder.h"
+#include "pipeline/run_folder.h"
 
 #include <signal.h>
 #include <unistd.h>
@@ -10,10 +10,10 @@
 #include <sstream>
 #include <vector>
 
-#include "app/frame_range.h"
+#include "pipeline/frame_range.h"
 #include "core/atomic_file.h"
 
-namespace confluent::app {
+namespace confluent {
 namespace fs = std::filesystem;
 
 std::string RunFolder::Path(const std::string& relative) const { return (fs::path(root) / relative).string(); }
@@ -97,4 +97,4 @@ double NowSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-}  // namespace confluent::app
+}  // namespace confluent

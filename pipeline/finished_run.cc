@@ -1,0 +1,57 @@
+#include "pipeline/finished_run.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "core/error.h"
+
+namespace confluent {
+namespace fs = std::filesystem;
+
+std::vector<std::string> FinishedRun::HeldOutCameras() const {
+  return manifest ? manifest->held_out_cameras : std::vector<std::string>{};
+}
+
+double FinishedRun::fps() const { return manifest && manifest->fps > 0.0 ? manifest->fps : kAssumedFrameRate; }
+
+FinishedRun OpenFinishedRun(const std::string& root, const std::string& capture_root) {
+  std::error_code error;
+  if (!fs::is_directory(root, error)) throw InputError(root, "run folder not found");
+  FinishedRun run;
+  run.folder.root = root;
+  const std::string manifest_path = RunManifestPath(root);
+  if (fs::exists(manifest_path, error)) run.manifest = ReadRunManifest(manifest_path);
+  run.capture_root = capture_root;
+  if (run.capture_root.empty() && run.manifest) run.capture_root = run.manifest->capture;
+  if (run.capture_root.empty())
+    throw UsageError("CAPTURE: not given, and " + manifest_path +
+                     (run.manifest ? " names no capture" : " does not exist") + "; give the capture folder");
+  return run;
+}
+
+std::vector<std::string> TexturingExclusions(const FinishedRun& run, const Rig& rig, std::vector<std::string> excluded,
+                                             bool texture_from_held_out, std::string* warning) {
+  for (const std::string& name : excluded) rig.Get(name);  // UsageError listing the known names
+  std::vector<std::string> held_out_used;
+  for (const std::string& name : run.HeldOutCameras()) {
+    if (rig.IndexOf(name) < 0 || std::find(excluded.begin(), excluded.end(), name) != excluded.end()) continue;
+    if (texture_from_held_out)
+      held_out_used.push_back(name);
+    else
+      excluded.push_back(name);
+  }
+  if (warning != nullptr && !held_out_used.empty()) {
+    std::string names;
+    for (const std::string& name : held_out_used) names += (names.empty() ? "" : ", ") + name;
+    *warning = "texturing from camera(s) the run held out (" + names +
+               "): a view of a held-out camera textured from itself proves nothing about the run";
+  }
+  const auto is_excluded = [&](const Camera& camera) {
+    return std::find(excluded.begin(), excluded.end(), camera.name) != excluded.end();
+  };
+  if (std::all_of(rig.cameras.begin(), rig.cameras.end(), is_excluded))
+    throw UsageError("--exclude-camera: no camera is left for texturing");
+  return excluded;
+}
+
+}  // namespace confluent
