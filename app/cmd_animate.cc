@@ -20,12 +20,12 @@
 #include "core/mesh_io.h"
 #include "core/video_writer.h"
 #include "deform/confluent_motion.h"
-#include "deform/correspondence_placement.h"
 #include "deform/correspondences.h"
 #include "deform/point_cache.h"
 #include "render/camera_path.h"
 #include "render/renderer.h"
 #include "tracking/body_template.h"
+#include "pipeline/scan_correspondence.h"
 #include "tracking/scan_registration.h"
 #include "tracking/template_motion.h"
 
@@ -127,25 +127,20 @@ TemplateMotion BvhMotionOfTemplate(const ParsedArgs& args, const std::string& sc
   double start = Now();
   if (correspondences_path.empty()) {
     // Automatic: register the template to the scan, place the pairs, keep both for re-runs.
-    registration = RegisterTemplateToScan(*body, scan, ScanRegistrationOptions(), scan_path);
-    motion.reference = body->PosedMesh(registration.shape, registration.pose);
-    std::printf("template registered to the scan: rms residual %.4g (scan units, %.3g m per unit) (%.2f s)\n",
-                registration.rms_residual_m, registration.metres_per_unit, Now() - start);
+    const ScanCorrespondence result = CorrespondTemplateToScan(*body, scan, scan_path, ScanCorrespondenceOptions());
+    registration = result.registration;
+    motion.reference = result.reference;
+    motion.correspondences = result.correspondences;
+    std::printf("template registered to the scan: rms residual %.4g (scan units, %.3g m per unit), %zu correspondences "
+                "placed automatically (%.2f s)\n",
+                registration.rms_residual_m, registration.metres_per_unit, motion.correspondences.pairs.size(),
+                Now() - start);
     for (const std::string& warning : registration.warnings)
       std::fprintf(stderr, "warning: %s: %s\n", scan_path.c_str(), warning.c_str());
-    start = Now();
-    CorrespondencePlacementOptions placement;
-    placement.metres_per_unit = registration.metres_per_unit;
-    placement.joint_positions = body->JointPositions(registration.shape, registration.pose);
-    motion.correspondences = PlaceCorrespondences(motion.reference, scan, placement);
     const std::string written = out_dir + "/correspondences.json";
-    WriteMesh(out_dir + "/template_reference.ply", motion.reference);
-    motion.correspondences.scan_path = std::filesystem::absolute(scan_path).string();
-    motion.correspondences.template_path = "template_reference.ply";
-    WriteCorrespondences(written, motion.correspondences);
-    WriteTemplateRegistration(written, *body, registration);
-    std::printf("%zu correspondences placed automatically, written to %s (%.2f s)\n",
-                motion.correspondences.pairs.size(), written.c_str(), Now() - start);
+    WriteScanCorrespondence(result, *body, scan_path, out_dir + "/template_reference.ply", "template_reference.ply",
+                            written);
+    std::printf("written to %s\n", written.c_str());
   } else {
     registration = ReadTemplateRegistration(correspondences_path, *body);
     motion.correspondences = ReadCorrespondences(correspondences_path);

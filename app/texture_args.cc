@@ -23,11 +23,4 @@ ProjectiveTextureOptions TextureOptionsFromArgs(const ParsedArgs& args) {
   return options;
 }
 
-std::string DescribeTextureOptions(const ProjectiveTextureOptions& options) {
-  char line[120];
-  std::snprintf(line, sizeof line, "best %d camera%s, feather %g px, %s", options.best_k, options.best_k == 1 ? "" : "s",
-                options.feather_px, options.colour_balance ? "colour balance" : "no colour balance");
-  return line;
-}
-
 }  // namespace confluent::app

@@ -15,7 +15,4 @@ std::vector<OptionSpec> TextureOptionSpecs();
 // The options given (defaults otherwise). Throws UsageError for out-of-range values.
 ProjectiveTextureOptions TextureOptionsFromArgs(const ParsedArgs& args);
 
-// One line for reports, e.g. "best 3 cameras, feather 8 px, no colour balance".
-std::string DescribeTextureOptions(const ProjectiveTextureOptions& options);
-
 }  // namespace confluent::app

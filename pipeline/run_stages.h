@@ -14,6 +14,7 @@
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "tracking/body_template.h"
+#include "tracking/tracker.h"
 
 namespace confluent {
 
@@ -32,6 +33,7 @@ struct RunInputs {
   bool refine_silhouettes = true;    // pull the animated scan onto the used cameras' masks
   int refine_iterations = 18;        // rounds of the silhouette refinement per frame
   bool refine_photo = true;          // then make neighbouring used cameras agree on the texture
+  TrackerOptions tracker;            // of the tracking stage
 };
 
 // How much a stage did.

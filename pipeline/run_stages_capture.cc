@@ -108,7 +108,7 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
   const std::vector<std::string> camera_names = rig.names();
   fs::create_directories(inputs.folder.Path("tracking"));
   fs::create_directories(inputs.folder.Path("template"));
-  Tracker tracker(rig, inputs.cameras.held_out_mask());
+  Tracker tracker(rig, inputs.cameras.held_out_mask(), inputs.tracker);
   auto read_state = [&](int frame) {
     PosesFile state = ReadPosesJson(inputs.folder.TrackingStatePath(frame), body, camera_names);
     if (state.frames.size() != 1) throw InputError(inputs.folder.TrackingStatePath(frame), "expected one frame");

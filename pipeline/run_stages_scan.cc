@@ -7,18 +7,17 @@
 #include <filesystem>
 
 #include "pipeline/run_stages.h"
+#include "pipeline/scan_correspondence.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"
 #include "core/video_writer.h"
 #include "deform/confluent_motion.h"
-#include "deform/correspondence_placement.h"
 #include "deform/correspondences.h"
 #include "refine/photo_refinement.h"
 #include "refine/silhouette_refinement.h"
 #include "render/camera_path.h"
 #include "render/projective_texture.h"
-#include "tracking/scan_registration.h"
 
 namespace confluent {
 namespace fs = std::filesystem;
@@ -33,37 +32,21 @@ StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& 
     report.skipped = 1;
     return report;
   }
-  const Mesh& scan = *inputs.scan;
   // The template in the scan's reference pose, with the tracked shape: the rotations of the
   // tracked frames are then measured from the pose the scan stands in.
-  ScanRegistrationOptions options;
-  options.fit_shape = false;
-  options.initial_shape = shape;
-  const ScanRegistration registration = RegisterTemplateToScan(body, scan, options, inputs.scan_path);
-  const Mesh reference = body.PosedMesh(shape, registration.pose);
+  ScanCorrespondenceOptions options;
+  options.known_shape = shape;
+  options.given_path = inputs.correspondences_path;
+  const ScanCorrespondence result = CorrespondTemplateToScan(body, *inputs.scan, inputs.scan_path, options);
   char residual[64];
   std::snprintf(residual, sizeof residual, "template registered to the scan: rms residual %.2f cm",
-                100.0 * registration.rms_residual_m);
+                100.0 * result.registration.rms_residual_m);
   report.notes.push_back(residual);
-  for (const std::string& warning : registration.warnings) report.notes.push_back("warning: " + warning);
-
-  Correspondences correspondences;
-  if (!inputs.correspondences_path.empty()) {
-    correspondences = ReadCorrespondences(inputs.correspondences_path);
-    ValidateCorrespondences(correspondences, static_cast<int>(reference.faces.size()), static_cast<int>(scan.faces.size()),
-                            inputs.correspondences_path);
-    report.notes.push_back(std::to_string(correspondences.pairs.size()) + " correspondences given: " + inputs.correspondences_path);
-  } else {
-    CorrespondencePlacementOptions placement;
-    placement.joint_positions = body.JointPositions(shape, registration.pose);
-    placement.metres_per_unit = registration.metres_per_unit;
-    correspondences = PlaceCorrespondences(reference, scan, placement);
-    report.notes.push_back(std::to_string(correspondences.pairs.size()) + " correspondences placed automatically");
-  }
-  correspondences.scan_path = fs::absolute(inputs.scan_path).string();
-  correspondences.template_path = "template_reference.ply";
-  WriteMesh(reference_path, reference);
-  WriteCorrespondences(out_path, correspondences);
+  for (const std::string& warning : result.registration.warnings) report.notes.push_back("warning: " + warning);
+  report.notes.push_back(std::to_string(result.correspondences.pairs.size()) +
+                         (result.given ? " correspondences given: " + inputs.correspondences_path
+                                       : std::string(" correspondences placed automatically")));
+  WriteScanCorrespondence(result, body, inputs.scan_path, reference_path, "template_reference.ply", out_path);
   report.computed = 1;
   report.seconds = NowSeconds() - start;
   timings->Add("correspondences", -1, report.seconds);

@@ -79,8 +79,10 @@ void WritePosesJson(const std::string& path, const BodyTemplate& body, const Bod
                  {"final_cost", f.fit.final_cost},
                  {"mean_outside_px", f.fit.mean_outside_px},
                  {"mean_contour_px", f.fit.mean_contour_px},
-                 {"cameras", f.fit.num_cameras}};
+                 {"cameras", f.fit.num_cameras},
+                 {"seconds", f.fit.seconds}};
     jf["seconds"] = f.seconds;
+    jf["cpu_seconds"] = f.cpu_seconds;
     list.push_back(jf);
   }
   root["frames"] = list;
@@ -122,6 +124,7 @@ PosesFile ReadPosesJson(const std::string& path, const BodyTemplate& body, const
       f.mean_iou = jf.value("mean_iou", 0.0);
       f.flags = jf.value("flags", std::vector<std::string>{});
       f.seconds = jf.value("seconds", 0.0);
+      f.cpu_seconds = jf.value("cpu_seconds", 0.0);
       f.camera_iou.assign(camera_names.size(), -1.0);
       if (jf.contains("camera_iou"))
         for (std::size_t c = 0; c < camera_names.size(); ++c)
@@ -132,6 +135,7 @@ PosesFile ReadPosesJson(const std::string& path, const BodyTemplate& body, const
         f.fit.mean_outside_px = jf["fit"].value("mean_outside_px", 0.0);
         f.fit.mean_contour_px = jf["fit"].value("mean_contour_px", 0.0);
         f.fit.num_cameras = jf["fit"].value("cameras", 0);
+        f.fit.seconds = jf["fit"].value("seconds", 0.0);
       }
       file.frames.push_back(std::move(f));
     }

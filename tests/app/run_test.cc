@@ -70,10 +70,11 @@ int CountFiles(const std::string& dir, const std::string& extension) {
 
 bool IsTemporary(const fs::path& path) { return path.filename().string().rfind(".tmp", 0) == 0; }
 
-// Drops every "seconds" member (wall-clock time of a step) from a JSON value.
+// Drops every "seconds" and "cpu_seconds" member (time of a step) from a JSON value.
 void DropSeconds(nlohmann::json* json) {
   if (json->is_object()) {
     json->erase("seconds");
+    json->erase("cpu_seconds");
     for (auto& [key, value] : json->items()) DropSeconds(&value);
   } else if (json->is_array()) {
     for (auto& value : *json) DropSeconds(&value);

@@ -1,4 +1,4 @@
-#include "app/plot.h"
+#include "pipeline/plot.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 
 #include "core/cv_interop.h"
 
-namespace confluent::app {
+namespace confluent {
 namespace {
 
 std::string Number(double value) {
@@ -168,4 +168,4 @@ Image SideBySide(const std::vector<Image>& images, const std::vector<std::string
   return ImageFromCvMat(canvas);
 }
 
-}  // namespace confluent::app
+}  // namespace confluent

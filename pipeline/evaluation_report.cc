@@ -1,4 +1,4 @@
-#include "app/run_report.h"
+#include "pipeline/evaluation_report.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 
-namespace confluent::app {
+namespace confluent {
 namespace fs = std::filesystem;
 
 namespace {
@@ -169,4 +169,4 @@ std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, c
   return html.str();
 }
 
-}  // namespace confluent::app
+}  // namespace confluent

@@ -7,7 +7,7 @@
 
 #include "core/image.h"
 
-namespace confluent::app {
+namespace confluent {
 
 // One line of a chart: y values at the given x values (same length).
 struct PlotSeries {
@@ -37,4 +37,4 @@ Image CropImage(const Image& image, const std::array<int, 4>& box);
 // Images placed side by side (same height; RGB8), each with a caption strip above it.
 Image SideBySide(const std::vector<Image>& images, const std::vector<std::string>& captions);
 
-}  // namespace confluent::app
+}  // namespace confluent

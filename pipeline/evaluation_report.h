@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-namespace confluent::app {
+namespace confluent {
 
 // A JSON number, or null for NaN/infinite values (metrics that could not be computed).
 nlohmann::json JsonNumber(double value);
@@ -56,4 +56,4 @@ std::string SummaryTable(const EvaluationSummary& summary);
 std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, const Rig& rig,
                        const std::vector<int>& heldout);
 
-}  // namespace confluent::app
+}  // namespace confluent

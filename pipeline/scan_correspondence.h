@@ -1,0 +1,47 @@
+#pragma once
+// The template registered to the actor's scan, and the template <-> scan triangle pairs that
+// drive Confluent Motion: placed automatically (with optional manual pairs first) or read from
+// a given file. The one implementation behind `run`, `correspond` and `animate`.
+
+#include <optional>
+#include <string>
+
+#include "core/mesh.h"
+#include "deform/correspondence_placement.h"
+#include "deform/correspondences.h"
+#include "tracking/body_template.h"
+#include "tracking/scan_registration.h"
+
+namespace confluent {
+
+struct ScanCorrespondenceOptions {
+  // The body's shape when it is known (the tracked one): only the pose is registered, and the
+  // reference template keeps exactly this shape. Absent: the shape is fitted to the scan.
+  std::optional<BodyShape> known_shape;
+  std::optional<TemplatePose> initial_pose;  // where the registration starts (a tracked pose)
+  std::string given_path;   // correspondences to read and validate instead of placing; "": place
+  std::string manual_path;  // with placement: pairs kept first, the automatic ones complete them
+  double joint_clearance_m = CorrespondencePlacementOptions().joint_clearance_m;
+};
+
+struct ScanCorrespondence {
+  ScanRegistration registration;    // with its warnings
+  Mesh reference;                   // the template in the scan's pose, face labels = segments
+  Correspondences correspondences;  // validated against `reference` and the scan
+  bool given = false;               // read from options.given_path
+  int num_manual = 0;               // manual pairs among them
+};
+
+// Registers `body` to `scan` (read from `scan_path`) and places or reads the pairs. Throws
+// InputError naming the scan or a correspondences file, UsageError for a bad option.
+ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh& scan, const std::string& scan_path,
+                                            const ScanCorrespondenceOptions& options);
+
+// Writes the reference template to `template_path` and the pairs, with the registration, to
+// `correspondences_path`; the file names the scan (absolute) and the template as
+// `template_reference` (e.g. relative to the file). Throws OutputError.
+void WriteScanCorrespondence(const ScanCorrespondence& result, const BodyTemplate& body, const std::string& scan_path,
+                             const std::string& template_path, const std::string& template_reference,
+                             const std::string& correspondences_path);
+
+}  // namespace confluent
