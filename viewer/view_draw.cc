@@ -9,12 +9,12 @@
 #include <vector>
 
 #include "pipeline/frame_range.h"
-#include "app/view_state.h"
+#include "viewer/view_state.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_ops.h"
 
-namespace confluent::app::view_internal {
+namespace confluent::view_internal {
 namespace {
 namespace fs = std::filesystem;
 
@@ -234,4 +234,4 @@ void Draw(Viewer& viewer, bool with_timeline) {
   }
 }
 
-}  // namespace confluent::app::view_internal
+}  // namespace confluent::view_internal

@@ -1,7 +1,7 @@
 #pragma once
-// INTERNAL (app/cmd_view.cc and app/view_draw.cc only): the state of `confluent view`'s window:
+// INTERNAL (viewer/viewer_window.cc and viewer/view_draw.cc only): the state of `confluent view`'s window:
 // the orbiting viewer camera, the capture behind the run, and the Viewer that the input handlers
-// (cmd_view.cc) change and Draw (view_draw.cc) shows.
+// (viewer_window.cc) change and Draw (view_draw.cc) shows.
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -14,14 +14,14 @@
 #include <string>
 #include <vector>
 
-#include "app/viewer_run.h"
+#include "viewer/viewer_run.h"
 #include "calib/capture.h"
 #include "core/mesh.h"
 #include "render/projective_texture.h"
 #include "render/renderer.h"
 #include "render/viewer_scene.h"
 
-namespace confluent::app::view_internal {
+namespace confluent::view_internal {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kVerticalFovDeg = 40.0;  // of the viewer camera
@@ -153,4 +153,4 @@ void UpdateGeometry(Viewer& viewer);
 // Draws the current state into the window's back buffer (view_draw.cc).
 void Draw(Viewer& viewer, bool with_timeline);
 
-}  // namespace confluent::app::view_internal
+}  // namespace confluent::view_internal

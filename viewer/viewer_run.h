@@ -10,7 +10,7 @@
 
 #include "core/mesh.h"
 
-namespace confluent::app {
+namespace confluent {
 
 // A run folder as the viewer sees it.
 struct ViewerRun {
@@ -55,4 +55,4 @@ class FrameCache {
   std::list<int> recent_;  // most recent first
 };
 
-}  // namespace confluent::app
+}  // namespace confluent

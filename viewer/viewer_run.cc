@@ -1,4 +1,4 @@
-#include "app/viewer_run.h"
+#include "viewer/viewer_run.h"
 
 #include <algorithm>
 #include <cctype>
@@ -9,7 +9,7 @@
 #include "core/mesh_io.h"
 #include "pipeline/run_manifest.h"
 
-namespace confluent::app {
+namespace confluent {
 namespace fs = std::filesystem;
 namespace {
 
@@ -105,4 +105,4 @@ std::shared_ptr<const Mesh> FrameCache::Get(int frame, std::string* error) {
   return found->second.mesh;
 }
 
-}  // namespace confluent::app
+}  // namespace confluent
