@@ -79,11 +79,11 @@ const Sequence& GetSequence() {
       TemplatePose pose;
       pose.root_rotation = Eigen::Vector3d(0, 0, 0.8 * t);
       pose.root_translation = Eigen::Vector3d(0.1 * t, 0, 0);
-      pose.dofs[kTjLeftShoulder] = {0.5 * std::sin(4 * t), 1.2 * t, 0};
-      pose.dofs[kTjRightShoulder] = {-0.5 * std::sin(4 * t), -1.0 * t, 0};
-      pose.dofs[kTjLeftElbow] = {0.3 + 0.6 * t, 0, 0};
-      pose.dofs[kTjLeftHip] = {0.6 * std::sin(3 * t), 0, 0};
-      pose.dofs[kTjLeftKnee] = {-0.8 * t, 0, 0};
+      pose.dofs[kJointLeftShoulder] = {0.5 * std::sin(4 * t), 1.2 * t, 0};
+      pose.dofs[kJointRightShoulder] = {-0.5 * std::sin(4 * t), -1.0 * t, 0};
+      pose.dofs[kJointLeftElbow] = {0.3 + 0.6 * t, 0, 0};
+      pose.dofs[kJointLeftHip] = {0.6 * std::sin(3 * t), 0, 0};
+      pose.dofs[kJointLeftKnee] = {-0.8 * t, 0, 0};
       const Mesh mesh = body.PosedMesh(shape, pose);
       std::vector<Image> row;
       for (const Camera& camera : s.rig.cameras) row.push_back(RasterizeSilhouette(mesh, camera, 1));

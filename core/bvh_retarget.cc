@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/body_model.h"
 #include "core/error.h"
 
 namespace confluent {
@@ -55,10 +56,13 @@ const std::vector<NameRule>& NameRules() {
   return rules;
 }
 
-const std::vector<std::string>& EssentialJoints() {
-  static const std::vector<std::string> names = {
-      "pelvis",        "left_shoulder", "left_elbow", "left_wrist",  "right_shoulder", "right_elbow", "right_wrist",
-      "left_hip",      "left_knee",     "left_ankle", "right_hip",   "right_knee",     "right_ankle"};
+// The joints a BVH must provide (the others may follow their parents).
+std::vector<std::string> EssentialJoints() {
+  std::vector<std::string> names;
+  for (BodyJoint joint : {kJointPelvis, kJointLeftShoulder, kJointLeftElbow, kJointLeftWrist, kJointRightShoulder,
+                          kJointRightElbow, kJointRightWrist, kJointLeftHip, kJointLeftKnee, kJointLeftAnkle,
+                          kJointRightHip, kJointRightKnee, kJointRightAnkle})
+    names.push_back(BodyJointNames()[joint]);
   return names;
 }
 

@@ -1,6 +1,6 @@
 #pragma once
-// Retargeting BVH motion capture onto the studio / template skeleton (joint names of
-// studio/actor.h StudioJointNames: pelvis, spine, chest, neck, head, head_end,
+// Retargeting BVH motion capture onto the body's skeleton (core/body_model.h BodyJointNames:
+// pelvis, spine, chest, neck, head, head_end,
 // {left,right}_{shoulder,elbow,wrist,hand_end,hip,knee,ankle,toe}).
 //
 // Method. BVH joints are matched to target joints by name (CMU, 3ds-Max CMU, Mixamo, MakeHuman,

@@ -197,7 +197,7 @@ TemplateMotion BvhMotionOfTemplate(const BvhMotionSourceOptions& source_options,
   motion.num_frames = static_cast<int>(poses->size());
   motion.fps = options.fps;
   const std::vector<Eigen::Vector3d> first = JointPositions(body->MakeSkeleton(registration.shape), poses->front());
-  const Eigen::Vector3d facing = (first[kTjLeftHip] - first[kTjRightHip]).cross(Eigen::Vector3d::UnitZ());
+  const Eigen::Vector3d facing = (first[kJointLeftHip] - first[kJointRightHip]).cross(Eigen::Vector3d::UnitZ());
   motion.front_azimuth_deg = std::atan2(facing.y(), facing.x()) * 180.0 / M_PI;
   const BodyShape shape = registration.shape;
   motion.frame_vertices = [body, poses, shape](int i) { return PosedTemplateMesh(*body, shape, (*poses)[i]).vertices; };

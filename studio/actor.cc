@@ -17,17 +17,17 @@ namespace actor_internal {
 
 const std::vector<Bone>& Bones() {
   static const std::vector<Bone> bones = {
-      {kPelvis, kSpine, BodySegment::kLowerTorso},     {kSpine, kChest, BodySegment::kUpperTorso},
-      {kChest, kNeck, BodySegment::kUpperTorso},       {kNeck, kHead, BodySegment::kNeck},
-      {kHead, kHeadEnd, BodySegment::kHead},           {kChest, kLShoulder, BodySegment::kUpperTorso},
-      {kLShoulder, kLElbow, BodySegment::kLeftUpperArm}, {kLElbow, kLWrist, BodySegment::kLeftForearm},
-      {kLWrist, kLHandEnd, BodySegment::kLeftHand},    {kChest, kRShoulder, BodySegment::kUpperTorso},
-      {kRShoulder, kRElbow, BodySegment::kRightUpperArm}, {kRElbow, kRWrist, BodySegment::kRightForearm},
-      {kRWrist, kRHandEnd, BodySegment::kRightHand},   {kPelvis, kLHip, BodySegment::kLowerTorso},
-      {kLHip, kLKnee, BodySegment::kLeftThigh},        {kLKnee, kLAnkle, BodySegment::kLeftShank},
-      {kLAnkle, kLToe, BodySegment::kLeftFoot},        {kPelvis, kRHip, BodySegment::kLowerTorso},
-      {kRHip, kRKnee, BodySegment::kRightThigh},       {kRKnee, kRAnkle, BodySegment::kRightShank},
-      {kRAnkle, kRToe, BodySegment::kRightFoot},
+      {kJointPelvis, kJointSpine, BodySegment::kLowerTorso},     {kJointSpine, kJointChest, BodySegment::kUpperTorso},
+      {kJointChest, kJointNeck, BodySegment::kUpperTorso},       {kJointNeck, kJointHead, BodySegment::kNeck},
+      {kJointHead, kJointHeadEnd, BodySegment::kHead},           {kJointChest, kJointLeftShoulder, BodySegment::kUpperTorso},
+      {kJointLeftShoulder, kJointLeftElbow, BodySegment::kLeftUpperArm}, {kJointLeftElbow, kJointLeftWrist, BodySegment::kLeftForearm},
+      {kJointLeftWrist, kJointLeftHandEnd, BodySegment::kLeftHand},    {kJointChest, kJointRightShoulder, BodySegment::kUpperTorso},
+      {kJointRightShoulder, kJointRightElbow, BodySegment::kRightUpperArm}, {kJointRightElbow, kJointRightWrist, BodySegment::kRightForearm},
+      {kJointRightWrist, kJointRightHandEnd, BodySegment::kRightHand},   {kJointPelvis, kJointLeftHip, BodySegment::kLowerTorso},
+      {kJointLeftHip, kJointLeftKnee, BodySegment::kLeftThigh},        {kJointLeftKnee, kJointLeftAnkle, BodySegment::kLeftShank},
+      {kJointLeftAnkle, kJointLeftToe, BodySegment::kLeftFoot},        {kJointPelvis, kJointRightHip, BodySegment::kLowerTorso},
+      {kJointRightHip, kJointRightKnee, BodySegment::kRightThigh},       {kJointRightKnee, kJointRightAnkle, BodySegment::kRightShank},
+      {kJointRightAnkle, kJointRightToe, BodySegment::kRightFoot},
   };
   return bones;
 }
@@ -55,7 +55,7 @@ SkinWeights ComputeWeights(const Mesh& mesh, const Adjacency& adjacency, const s
   const int n = mesh.num_vertices();
   const int nb = static_cast<int>(bones.size());
   const double sigma = 0.03 * s;
-  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(n, kNumStudioJoints);
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(n, kNumBodyJoints);
   std::vector<double> d(nb);
   for (int v = 0; v < n; ++v) {
     const Vector3d p = mesh.vertices.row(v).transpose();
@@ -74,7 +74,7 @@ SkinWeights ComputeWeights(const Mesh& mesh, const Adjacency& adjacency, const s
     }
     w.row(v) /= w.row(v).sum();
   }
-  Eigen::MatrixXd next(n, kNumStudioJoints);
+  Eigen::MatrixXd next(n, kNumBodyJoints);
   for (int it = 0; it < 4; ++it) {
     for (int v = 0; v < n; ++v) {
       Eigen::RowVectorXd mean = w.row(v);
@@ -88,7 +88,7 @@ SkinWeights ComputeWeights(const Mesh& mesh, const Adjacency& adjacency, const s
   weights.joints.setConstant(n, 4, -1);
   weights.weights.setZero(n, 4);
   for (int v = 0; v < n; ++v) {
-    std::vector<int> order(kNumStudioJoints);
+    std::vector<int> order(kNumBodyJoints);
     std::iota(order.begin(), order.end(), 0);
     std::partial_sort(order.begin(), order.begin() + 4, order.end(), [&](int a, int b) { return w(v, a) > w(v, b); });
     double sum = 0.0;
@@ -124,47 +124,14 @@ void StudioActorOptions::Check() const {
     throw UsageError("smoothing_iterations: must be within [0, 200]");
 }
 
-std::vector<std::string> StudioJointNames() {
-  return {"pelvis", "spine", "chest", "neck", "head", "head_end",
-          "left_shoulder", "left_elbow", "left_wrist", "left_hand_end",
-          "right_shoulder", "right_elbow", "right_wrist", "right_hand_end",
-          "left_hip", "left_knee", "left_ankle", "left_toe",
-          "right_hip", "right_knee", "right_ankle", "right_toe"};
-}
-
 Skeleton MakeStudioSkeleton(const StudioActorOptions& options) {
   options.Check();
   const double s = options.height_m / 1.75;
-  const double angle = options.arm_angle_deg * M_PI / 180.0;
-  std::vector<Vector3d> rest(kNumStudioJoints);
-  const int parents[kNumStudioJoints] = {-1, kPelvis, kSpine, kChest, kNeck, kHead,
-                                         kChest, kLShoulder, kLElbow, kLWrist,
-                                         kChest, kRShoulder, kRElbow, kRWrist,
-                                         kPelvis, kLHip, kLKnee, kLAnkle,
-                                         kPelvis, kRHip, kRKnee, kRAnkle};
-  rest[kPelvis] = Vector3d(0, 0, 0.96);
-  rest[kSpine] = Vector3d(0, -0.005, 1.10);
-  rest[kChest] = Vector3d(0, -0.01, 1.28);
-  rest[kNeck] = Vector3d(0, -0.012, 1.455);
-  rest[kHead] = Vector3d(0, -0.005, 1.56);
-  rest[kHeadEnd] = Vector3d(0, 0.005, 1.75);
-  for (int side = 0; side < 2; ++side) {
-    const double sx = side == 0 ? -1.0 : 1.0;  // the actor's left is -x
-    const int shoulder = side == 0 ? kLShoulder : kRShoulder;
-    const Vector3d dir(sx * std::sin(angle), 0.0, -std::cos(angle));
-    rest[shoulder] = Vector3d(sx * 0.19, -0.015, 1.425);
-    rest[shoulder + 1] = rest[shoulder] + 0.285 * dir;
-    rest[shoulder + 2] = rest[shoulder + 1] + 0.25 * dir;
-    rest[shoulder + 3] = rest[shoulder + 2] + 0.18 * dir;
-    const int hip = side == 0 ? kLHip : kRHip;
-    rest[hip] = Vector3d(sx * 0.09, 0.0, 0.91);
-    rest[hip + 1] = Vector3d(sx * 0.102, 0.005, 0.49);
-    rest[hip + 2] = Vector3d(sx * 0.112, -0.02, 0.085);
-    rest[hip + 3] = Vector3d(sx * 0.125, 0.15, 0.02);
-  }
-  const std::vector<std::string> names = StudioJointNames();
+  const std::array<Vector3d, kNumBodyJoints> rest = BodyRestPositions(options.arm_angle_deg * M_PI / 180.0);
+  const std::array<int, kNumBodyJoints>& parents = BodyJointParents();
+  const std::vector<std::string>& names = BodyJointNames();
   Skeleton skeleton;
-  for (int j = 0; j < kNumStudioJoints; ++j) {
+  for (int j = 0; j < kNumBodyJoints; ++j) {
     Joint joint;
     joint.name = names[j];
     joint.parent = parents[j];
@@ -232,8 +199,8 @@ StudioActor BuildStudioActor(const StudioActorOptions& options) {
 }
 
 std::array<int, kNumBodySegments> StudioSegmentJoints() {
-  return {kHead, kNeck, kSpine, kPelvis, kLShoulder, kLElbow, kLWrist, kRShoulder,
-          kRElbow, kRWrist, kLHip, kLKnee, kLAnkle, kRHip, kRKnee, kRAnkle};
+  return {kJointHead, kJointNeck, kJointSpine, kJointPelvis, kJointLeftShoulder, kJointLeftElbow, kJointLeftWrist, kJointRightShoulder,
+          kJointRightElbow, kJointRightWrist, kJointLeftHip, kJointLeftKnee, kJointLeftAnkle, kJointRightHip, kJointRightKnee, kJointRightAnkle};
 }
 
 }  // namespace confluent

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/body_model.h"
 #include "core/body_segments.h"
 #include "core/mesh.h"
 #include "core/skeleton.h"
@@ -40,7 +41,7 @@ struct StudioActorOptions {
 
 // The actor: its skeleton, rest-pose mesh and skinning weights.
 struct StudioActor {
-  Skeleton skeleton;  // joints listed by StudioJointNames(), rest pose = the A-pose
+  Skeleton skeleton;  // the body's joints (core/body_model.h), rest pose = the A-pose
   // Rest-pose mesh: watertight, one component, with vertex colours (linear RGB) and
   // face_labels = BodySegment per face.
   Mesh mesh;
@@ -49,12 +50,8 @@ struct StudioActor {
   std::array<int, kNumBodySegments> segment_joint{};
 };
 
-// The joint names of the studio skeleton in order: pelvis (root), spine, chest, neck, head,
-// head_end, then for left and right: shoulder, elbow, wrist, hand_end, and hip, knee, ankle, toe
-// ("left_shoulder", ...).
-std::vector<std::string> StudioJointNames();
-
-// For each BodySegment, the index (into StudioJointNames()) of the joint that moves it rigidly.
+// For each BodySegment, the index (into BodyJointNames(), core/body_model.h) of the joint that
+// moves it rigidly.
 std::array<int, kNumBodySegments> StudioSegmentJoints();
 
 // The studio skeleton scaled to `options.height_m`, at rest in the A-pose (joint 0 = pelvis).

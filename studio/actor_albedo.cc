@@ -69,7 +69,7 @@ Eigen::Vector3d Albedo(const Vector3d& p, BodySegment segment, const std::vector
   };
   switch (segment) {
     case BodySegment::kHead: {
-      const Vector3d c = (J[kHead] / s) + Vector3d(0.0, 0.01, 0.085);
+      const Vector3d c = (J[kJointHead] / s) + Vector3d(0.0, 0.01, 0.085);
       const Vector3d d = q - c;
       const bool face = d.y() > 0.0 && d.z() < 0.03 - 0.3 * std::max(0.0, -d.y());
       color = skin;
@@ -96,10 +96,10 @@ Eigen::Vector3d Albedo(const Vector3d& p, BodySegment segment, const std::vector
       // Plaid in surface coordinates: around and along the torso (or the arm).
       double u = 0.0, v = 0.0;
       if (segment == BodySegment::kUpperTorso) {
-        u = std::atan2(q.x(), q.y() - J[kChest].y() / s) * 0.15;
+        u = std::atan2(q.x(), q.y() - J[kJointChest].y() / s) * 0.15;
         v = q.z();
       } else {
-        const int shoulder = segment == BodySegment::kLeftUpperArm ? kLShoulder : kRShoulder;
+        const int shoulder = segment == BodySegment::kLeftUpperArm ? kJointLeftShoulder : kJointRightShoulder;
         const Vector3d axis = (J[shoulder + 1] - J[shoulder]).normalized();
         const Vector3d d = p - J[shoulder];
         const Vector3d ref = (Vector3d::UnitY() - axis.y() * axis).normalized();
@@ -113,13 +113,13 @@ Eigen::Vector3d Albedo(const Vector3d& p, BodySegment segment, const std::vector
         color = shirt_thin;
       if (segment != BodySegment::kUpperTorso) {
         // Short sleeves with a hem; skin below.
-        const int shoulder = segment == BodySegment::kLeftUpperArm ? kLShoulder : kRShoulder;
+        const int shoulder = segment == BodySegment::kLeftUpperArm ? kJointLeftShoulder : kJointRightShoulder;
         double t = 0.0;
         SegmentDistance(p, J[shoulder], J[shoulder + 1], &t);
         if (t > 0.62) color = skin;
         else if (t > 0.56) color = shirt_line;
       } else {
-        const double chest_y = J[kChest].y() / s;
+        const double chest_y = J[kJointChest].y() / s;
         if (q.y() > chest_y + 0.04) {
           // Front: a yellow logo on the left chest and a white placket with buttons.
           const double lx = q.x() + 0.085, lz = q.z() - 1.33;
@@ -141,7 +141,7 @@ Eigen::Vector3d Albedo(const Vector3d& p, BodySegment segment, const std::vector
       color = skin;
       if (segment == BodySegment::kLeftForearm) {
         double t = 0.0;
-        SegmentDistance(p, J[kLElbow], J[kLWrist], &t);
+        SegmentDistance(p, J[kJointLeftElbow], J[kJointLeftWrist], &t);
         if (t > 0.82 && t < 0.93) color = SrgbToLinear(0.08, 0.08, 0.08);  // wristwatch
       }
       break;
@@ -173,7 +173,7 @@ Eigen::Vector3d Albedo(const Vector3d& p, BodySegment segment, const std::vector
     case BodySegment::kRightShank: {
       color = trousers();
       const bool left = segment == BodySegment::kLeftThigh || segment == BodySegment::kLeftShank;
-      const int hip = left ? kLHip : kRHip;
+      const int hip = left ? kJointLeftHip : kJointRightHip;
       const int a = (segment == BodySegment::kLeftThigh || segment == BodySegment::kRightThigh) ? hip : hip + 1;
       double t = 0.0;
       SegmentDistance(p, J[a], J[a + 1], &t);
@@ -188,7 +188,7 @@ Eigen::Vector3d Albedo(const Vector3d& p, BodySegment segment, const std::vector
     case BodySegment::kRightFoot: {
       color = white;
       const bool left = segment == BodySegment::kLeftFoot;
-      const int toe = left ? kLToe : kRToe;
+      const int toe = left ? kJointLeftToe : kJointRightToe;
       if (q.y() > J[toe].y() / s - 0.06) color = SrgbToLinear(0.85, 0.12, 0.10);
       if (OnLine(q.y() - q.z() * 1.5, 0.06, 0.008) && q.z() > 0.03) color = SrgbToLinear(0.85, 0.12, 0.10);
       if (q.z() < 0.018) color = SrgbToLinear(0.10, 0.10, 0.10);

@@ -9,22 +9,13 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/body_model.h"
 #include "studio/actor.h"
 
 namespace confluent::actor_internal {
 
 using Eigen::Vector2d;
 using Eigen::Vector3d;
-
-// Joint indices of the studio skeleton (StudioJointNames order).
-enum StudioJoint {
-  kPelvis, kSpine, kChest, kNeck, kHead, kHeadEnd,
-  kLShoulder, kLElbow, kLWrist, kLHandEnd,
-  kRShoulder, kRElbow, kRWrist, kRHandEnd,
-  kLHip, kLKnee, kLAnkle, kLToe,
-  kRHip, kRKnee, kRAnkle, kRToe,
-  kNumStudioJoints
-};
 
 // A bone from joint `from` to joint `to`; it is moved by `from` and belongs to `segment`.
 struct Bone {

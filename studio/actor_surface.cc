@@ -36,7 +36,7 @@ std::vector<Primitive> BodyPrimitives(const std::vector<Vector3d>& J, const Stud
     prims.push_back(p);
   };
   auto at = [&](double x, double y, double z) -> Vector3d { return Vector3d(x, y, z) * s; };
-  const Vector3d head_center = J[kHead] + Vector3d(0.0, 0.01 * s, 0.085 * s);
+  const Vector3d head_center = J[kJointHead] + Vector3d(0.0, 0.01 * s, 0.085 * s);
   // Torso: pelvis, waist, chest, shoulder girdle.
   add(at(0, -0.005, 0.86), at(0, -0.005, 1.02), Vector2d(0.158, 0.105) * gt, Vector2d(0.148, 0.098) * gt,
       0.09 * gt, 0.09 * gt, X, 0.0, BodySegment::kLowerTorso);
@@ -44,10 +44,10 @@ std::vector<Primitive> BodyPrimitives(const std::vector<Vector3d>& J, const Stud
       0.09 * gt, 0.09 * gt, X, 0.05 * gt, BodySegment::kUpperTorso);
   add(at(0, -0.01, 1.18), at(0, -0.015, 1.37), Vector2d(0.155, 0.104) * gt, Vector2d(0.160, 0.100) * gt,
       0.09 * gt, 0.055 * gt, X, 0.05 * gt, BodySegment::kUpperTorso);
-  add(J[kLShoulder] + at(0.03, 0, -0.015), J[kRShoulder] + at(-0.03, 0, -0.015), Vector2d(0.055, 0.06) * gt,
+  add(J[kJointLeftShoulder] + at(0.03, 0, -0.015), J[kJointRightShoulder] + at(-0.03, 0, -0.015), Vector2d(0.055, 0.06) * gt,
       Vector2d(0.055, 0.06) * gt, 0.055 * gt, 0.055 * gt, Vector3d::UnitZ(), 0.05 * gt, BodySegment::kUpperTorso);
   // Neck and head (skull, jaw, nose, ears).
-  add(J[kNeck] + at(0, 0, -0.05), J[kHead] + at(0, 0.005, 0.02), Vector2d(0.056, 0.058) * gh,
+  add(J[kJointNeck] + at(0, 0, -0.05), J[kJointHead] + at(0, 0.005, 0.02), Vector2d(0.056, 0.058) * gh,
       Vector2d(0.052, 0.054) * gh, 0.05 * gh, 0.05 * gh, X, 0.035 * gh, BodySegment::kNeck);
   add(head_center, head_center, Vector2d(0.078, 0.097) * gh, Vector2d(0.078, 0.097) * gh, 0.106 * gh,
       0.106 * gh, X, 0.03 * gh, BodySegment::kHead);
@@ -63,7 +63,7 @@ std::vector<Primitive> BodyPrimitives(const std::vector<Vector3d>& J, const Stud
         Vector2d(0.014, 0.024) * gh, 0.032 * gh, 0.032 * gh, X, 0.01 * gh, BodySegment::kHead);
   // Arms and hands.
   for (int side = 0; side < 2; ++side) {
-    const int shoulder = side == 0 ? kLShoulder : kRShoulder;
+    const int shoulder = side == 0 ? kJointLeftShoulder : kJointRightShoulder;
     const int elbow = shoulder + 1, wrist = shoulder + 2, hand_end = shoulder + 3;
     const BodySegment upper = side == 0 ? BodySegment::kLeftUpperArm : BodySegment::kRightUpperArm;
     const BodySegment fore = side == 0 ? BodySegment::kLeftForearm : BodySegment::kRightForearm;
@@ -81,7 +81,7 @@ std::vector<Primitive> BodyPrimitives(const std::vector<Vector3d>& J, const Stud
   }
   // Legs and feet.
   for (int side = 0; side < 2; ++side) {
-    const int hip = side == 0 ? kLHip : kRHip;
+    const int hip = side == 0 ? kJointLeftHip : kJointRightHip;
     const int knee = hip + 1, ankle = hip + 2, toe = hip + 3;
     const BodySegment thigh = side == 0 ? BodySegment::kLeftThigh : BodySegment::kRightThigh;
     const BodySegment shank = side == 0 ? BodySegment::kLeftShank : BodySegment::kRightShank;

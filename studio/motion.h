@@ -27,7 +27,7 @@ struct StudioMotionOptions {
 double DefaultPerformanceDuration();
 
 // Samples the default performance for `skeleton`, which must have the studio joint names
-// (StudioJointNames(); UsageError otherwise). Keyframes hold joint angles that are
+// (BodyJointNames(); UsageError otherwise). Keyframes hold joint angles that are
 // interpolated with a C1 cubic (Catmull-Rom-like Hermite) spline and composed into local
 // rotations; the root height is adjusted every frame so that the lower foot stays on the floor.
 // Frame f is at time f / fps * speed seconds. Returns num_frames poses.

@@ -120,7 +120,7 @@ StudioActor ReadRiggedActor(const std::string& mesh_path, const std::string& ski
   if (!json.is_object() || !json.contains("joints") || !json.contains("weights"))
     throw InputError(skin_path, "expected an object with \"joints\" and \"weights\"");
   actor.skeleton = ReadJoints(json["joints"], skin_path);
-  const std::vector<std::string> names = StudioJointNames();
+  const std::vector<std::string>& names = BodyJointNames();
   const std::array<int, kNumBodySegments> segment_joints = StudioSegmentJoints();
   for (const std::string& name : names) RequireJoint(actor.skeleton, name, skin_path);
   for (int s = 0; s < kNumBodySegments; ++s)

@@ -10,7 +10,7 @@
 // Joints are in topological order (parents first, joint 0 the only root), rest positions in the
 // mesh's frame (world Z up, metres, facing +y like the procedural actor). "weights" has one row
 // per mesh vertex with up to 4 (joint index, weight) pairs summing to 1. The skeleton must contain
-// every joint of StudioJointNames() (extra joints are allowed and follow their parents), so the
+// every joint of BodyJointNames() (core/body_model.h) (extra joints are allowed and follow their parents), so the
 // built-in performance and BVH retargeting can drive it.
 
 #include <string>

@@ -72,7 +72,7 @@ void RestPositions(const BodyTemplate& body, const T* length, const T* girth, st
     const int seg = body.offset_segment()[j];
     Vec3<T> scaled = offset.cast<T>() * length[seg];
     // Shoulders and hips sit laterally: their x offset follows the torso's girth.
-    if (j == kTjLeftShoulder || j == kTjRightShoulder || j == kTjLeftHip || j == kTjRightHip)
+    if (j == kJointLeftShoulder || j == kJointRightShoulder || j == kJointLeftHip || j == kJointRightHip)
       scaled.x() = T(offset.x()) * girth[seg];
     (*rest)[j] = (*rest)[p] + scaled;
   }

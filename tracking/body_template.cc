@@ -50,39 +50,11 @@ BodyShape BodyShape::Uniform(double height_m) {
 }
 
 BodyTemplate::BodyTemplate(int longitudes) {
-  joint_names_ = {"pelvis", "spine", "chest", "neck", "head", "head_end",
-                  "left_shoulder", "left_elbow", "left_wrist", "left_hand_end",
-                  "right_shoulder", "right_elbow", "right_wrist", "right_hand_end",
-                  "left_hip", "left_knee", "left_ankle", "left_toe",
-                  "right_hip", "right_knee", "right_ankle", "right_toe"};
-  parents_ = {-1, kTjPelvis, kTjSpine, kTjChest, kTjNeck, kTjHead,
-              kTjChest, kTjLeftShoulder, kTjLeftElbow, kTjLeftWrist,
-              kTjChest, kTjRightShoulder, kTjRightElbow, kTjRightWrist,
-              kTjPelvis, kTjLeftHip, kTjLeftKnee, kTjLeftAnkle,
-              kTjPelvis, kTjRightHip, kTjRightKnee, kTjRightAnkle};
+  joint_names_ = BodyJointNames();
+  parents_ = BodyJointParents();
   // Generic adult proportions (1.75 m), A-pose with the arms 40 degrees from the vertical.
-  auto& r = generic_rest_;
-  r[kTjPelvis] = Vector3d(0, 0, 0.96);
-  r[kTjSpine] = Vector3d(0, -0.005, 1.10);
-  r[kTjChest] = Vector3d(0, -0.01, 1.28);
-  r[kTjNeck] = Vector3d(0, -0.012, 1.455);
-  r[kTjHead] = Vector3d(0, -0.005, 1.56);
-  r[kTjHeadEnd] = Vector3d(0, 0.005, 1.75);
-  const double arm = 40.0 * kDeg;
-  for (int side = 0; side < 2; ++side) {
-    const double sx = side == 0 ? -1.0 : 1.0;
-    const int shoulder = side == 0 ? kTjLeftShoulder : kTjRightShoulder;
-    const Vector3d dir(sx * std::sin(arm), 0.0, -std::cos(arm));
-    r[shoulder] = Vector3d(sx * 0.19, -0.015, 1.425);
-    r[shoulder + 1] = r[shoulder] + 0.285 * dir;
-    r[shoulder + 2] = r[shoulder + 1] + 0.25 * dir;
-    r[shoulder + 3] = r[shoulder + 2] + 0.18 * dir;
-    const int hip = side == 0 ? kTjLeftHip : kTjRightHip;
-    r[hip] = Vector3d(sx * 0.09, 0.0, 0.91);
-    r[hip + 1] = Vector3d(sx * 0.102, 0.005, 0.49);
-    r[hip + 2] = Vector3d(sx * 0.112, -0.02, 0.085);
-    r[hip + 3] = Vector3d(sx * 0.125, 0.15, 0.02);
-  }
+  generic_rest_ = BodyRestPositions(40.0 * kDeg);
+  const auto& r = generic_rest_;
   // Which segment's length scale stretches each bone.
   const int S[kNumTemplateJoints] = {-1,
                                      int(BodySegment::kLowerTorso), int(BodySegment::kUpperTorso),
@@ -99,17 +71,17 @@ BodyTemplate::BodyTemplate(int longitudes) {
 
   // Degrees of freedom and anatomical limits (degrees, on the rotation-vector components in
   // the parent's rest-aligned frame: x = lateral axis, y = forward axis, z = up).
-  dofs_[kTjSpine] = Ball(-50, 35, -35, 35, -45, 45);
-  dofs_[kTjChest] = Ball(-35, 30, -30, 30, -45, 45);
-  dofs_[kTjHead] = Ball(-50, 50, -45, 45, -80, 80);
+  dofs_[kJointSpine] = Ball(-50, 35, -35, 35, -45, 45);
+  dofs_[kJointChest] = Ball(-35, 30, -30, 30, -45, 45);
+  dofs_[kJointHead] = Ball(-50, 50, -45, 45, -80, 80);
   for (int side = 0; side < 2; ++side) {
-    const int shoulder = side == 0 ? kTjLeftShoulder : kTjRightShoulder;
+    const int shoulder = side == 0 ? kJointLeftShoulder : kJointRightShoulder;
     dofs_[shoulder] = Ball(-170, 170, -170, 170, -170, 170);
     const Vector3d upper_dir = (r[shoulder + 1] - r[shoulder]).normalized();
     const Vector3d hinge = upper_dir.cross(Vector3d::UnitY()).normalized();  // flexion moves the forearm forwards
     dofs_[shoulder + 1] = Hinge(hinge, -5, 155);
     dofs_[shoulder + 2] = Hinge(hinge, -75, 75);
-    const int hip = side == 0 ? kTjLeftHip : kTjRightHip;
+    const int hip = side == 0 ? kJointLeftHip : kJointRightHip;
     dofs_[hip] = Ball(-40, 135, -55, 55, -60, 60);
     dofs_[hip + 1] = Hinge(Vector3d::UnitX(), -160, 5);
     dofs_[hip + 2] = Hinge2(Vector3d::UnitX(), -50, 50, Vector3d::UnitY(), -30, 30);
@@ -121,17 +93,17 @@ BodyTemplate::BodyTemplate(int longitudes) {
     segments_[int(s)] = SegmentShape{joint, ja, jb, oa, ob, ra, rb, ca, cb, e1};
   };
   const Vector3d X = Vector3d::UnitX(), Y = Vector3d::UnitY(), O = Vector3d::Zero();
-  seg(BodySegment::kHead, kTjHead, kTjHead, Vector3d(0, 0.01, 0.06), kTjHead, Vector3d(0, 0.01, 0.12),
+  seg(BodySegment::kHead, kJointHead, kJointHead, Vector3d(0, 0.01, 0.06), kJointHead, Vector3d(0, 0.01, 0.12),
       Vector2d(0.08, 0.097), Vector2d(0.078, 0.095), 0.065, 0.07, X);
-  seg(BodySegment::kNeck, kTjNeck, kTjNeck, Vector3d(0, 0, -0.03), kTjHead, Vector3d(0, 0, 0.01), Vector2d(0.055, 0.057),
+  seg(BodySegment::kNeck, kJointNeck, kJointNeck, Vector3d(0, 0, -0.03), kJointHead, Vector3d(0, 0, 0.01), Vector2d(0.055, 0.057),
       Vector2d(0.052, 0.054), 0.04, 0.04, X);
-  seg(BodySegment::kUpperTorso, kTjChest, kTjSpine, O, kTjNeck, Vector3d(0, 0, -0.035), Vector2d(0.145, 0.095),
+  seg(BodySegment::kUpperTorso, kJointChest, kJointSpine, O, kJointNeck, Vector3d(0, 0, -0.035), Vector2d(0.145, 0.095),
       Vector2d(0.175, 0.1), 0.08, 0.07, X);
-  seg(BodySegment::kLowerTorso, kTjPelvis, kTjPelvis, Vector3d(0, 0, -0.07), kTjSpine, O, Vector2d(0.16, 0.105),
+  seg(BodySegment::kLowerTorso, kJointPelvis, kJointPelvis, Vector3d(0, 0, -0.07), kJointSpine, O, Vector2d(0.16, 0.105),
       Vector2d(0.145, 0.095), 0.09, 0.06, X);
   for (int side = 0; side < 2; ++side) {
-    const int shoulder = side == 0 ? kTjLeftShoulder : kTjRightShoulder;
-    const int hip = side == 0 ? kTjLeftHip : kTjRightHip;
+    const int shoulder = side == 0 ? kJointLeftShoulder : kJointRightShoulder;
+    const int hip = side == 0 ? kJointLeftHip : kJointRightHip;
     const BodySegment upper = side == 0 ? BodySegment::kLeftUpperArm : BodySegment::kRightUpperArm;
     const BodySegment fore = side == 0 ? BodySegment::kLeftForearm : BodySegment::kRightForearm;
     const BodySegment hand = side == 0 ? BodySegment::kLeftHand : BodySegment::kRightHand;

@@ -5,9 +5,9 @@
 // (the lower torso extended down and flared) for long skirts and dresses.
 //
 // Frame and units: world Z up, metres. At rest the template stands at the origin in an A-pose
-// (upper arms 40 degrees from the vertical), facing +y; its left side is -x. The joints carry
-// the studio skeleton's names (studio/actor.h StudioJointNames), so joint errors against
-// the studio ground truth compare joints of the same name (see JointMappingNote()).
+// (upper arms 40 degrees from the vertical), facing +y; its left side is -x. The joints are the
+// body's (core/body_model.h), as the studio actor's, so joint errors against the studio ground
+// truth compare joints of the same name (see JointMappingNote()).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -15,21 +15,15 @@
 #include <string>
 #include <vector>
 
+#include "core/body_model.h"
 #include "core/body_segments.h"
 #include "core/mesh.h"
 #include "core/skeleton.h"
 
 namespace confluent {
 
-// The template's joints (same names and order as the studio skeleton).
-enum TemplateJoint {
-  kTjPelvis, kTjSpine, kTjChest, kTjNeck, kTjHead, kTjHeadEnd,
-  kTjLeftShoulder, kTjLeftElbow, kTjLeftWrist, kTjLeftHandEnd,
-  kTjRightShoulder, kTjRightElbow, kTjRightWrist, kTjRightHandEnd,
-  kTjLeftHip, kTjLeftKnee, kTjLeftAnkle, kTjLeftToe,
-  kTjRightHip, kTjRightKnee, kTjRightAnkle, kTjRightToe,
-};
-constexpr int kNumTemplateJoints = 22;
+// The template's joints are the body's (core/body_model.h).
+constexpr int kNumTemplateJoints = kNumBodyJoints;
 
 // How a joint may rotate relative to its parent.
 enum class JointType {
@@ -96,7 +90,7 @@ class BodyTemplate {
   // The generic template (1.75 m), meshed with `longitudes` steps around each segment.
   explicit BodyTemplate(int longitudes = 12);
 
-  // Joint names (StudioJointNames order), parents and the generic rest positions (m).
+  // Joint names (BodyJointNames), parents and the generic rest positions (m).
   const std::vector<std::string>& joint_names() const { return joint_names_; }
   const std::array<int, kNumTemplateJoints>& parents() const { return parents_; }
   const std::array<Eigen::Vector3d, kNumTemplateJoints>& generic_rest() const { return generic_rest_; }

@@ -542,8 +542,8 @@ ScanRegistration RegisterTemplateToScan(const BodyTemplate& body, const Mesh& sc
     const FitParams base = fp;
     for (double arm_deg : {40.0, 90.0, 12.0}) {
       FitParams h = base;
-      h.dofs[kTjLeftShoulder] = ArmAngle(body, kTjLeftShoulder, arm_deg);
-      h.dofs[kTjRightShoulder] = ArmAngle(body, kTjRightShoulder, arm_deg);
+      h.dofs[kJointLeftShoulder] = ArmAngle(body, kJointLeftShoulder, arm_deg);
+      h.dofs[kJointRightShoulder] = ArmAngle(body, kJointRightShoulder, arm_deg);
       const double max_d = options.max_pair_distance_m * scale;
       for (int round = 0; round < 2; ++round) {
         Pairing pairing = MakePairs(body, h, samples, tree, residual_samples, max_d, min_cos, loss);
@@ -577,7 +577,7 @@ ScanRegistration RegisterTemplateToScan(const BodyTemplate& body, const Mesh& sc
   {
     // The body's up direction: from the middle of the ankles to the head.
     const auto joints = body.JointPositions(result.shape, result.pose);
-    result.up_in_scan = (joints[kTjHead] - 0.5 * (joints[kTjLeftAnkle] + joints[kTjRightAnkle])).normalized();
+    result.up_in_scan = (joints[kJointHead] - 0.5 * (joints[kJointLeftAnkle] + joints[kJointRightAnkle])).normalized();
   }
   // Final statistics: every template point and scan sample paired with its nearest.
   const Pairing final_pairs =

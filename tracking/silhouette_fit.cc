@@ -299,7 +299,7 @@ bool IsCoarseSegment(int s) {
          s == int(BodySegment::kLowerTorso) || s == int(BodySegment::kLeftThigh) || s == int(BodySegment::kRightThigh);
 }
 
-bool IsCoarseJoint(int j) { return j == kTjSpine || j == kTjChest || j == kTjLeftHip || j == kTjRightHip; }
+bool IsCoarseJoint(int j) { return j == kJointSpine || j == kJointChest || j == kJointLeftHip || j == kJointRightHip; }
 
 // One Ceres solve over the segments/joints selected by `coarse`.
 void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& obs, const SilhouetteFitOptions& options,

@@ -14,13 +14,13 @@ using Eigen::Vector3d;
 
 // The horizontal facing direction of a body with joint positions `p`: (left hip - right hip) x z.
 Vector3d Heading(const std::vector<Vector3d>& p) {
-  Vector3d f = (p[kTjLeftHip] - p[kTjRightHip]).cross(Vector3d::UnitZ());
+  Vector3d f = (p[kJointLeftHip] - p[kJointRightHip]).cross(Vector3d::UnitZ());
   f.z() = 0;
   return f;
 }
 
 double LowestFoot(const std::vector<Vector3d>& p) {
-  return std::min({p[kTjLeftAnkle].z(), p[kTjRightAnkle].z(), p[kTjLeftToe].z(), p[kTjRightToe].z()});
+  return std::min({p[kJointLeftAnkle].z(), p[kJointRightAnkle].z(), p[kJointLeftToe].z(), p[kJointRightToe].z()});
 }
 
 }  // namespace

@@ -200,8 +200,8 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
       pose.root_translation = Vector3d(placement_.centroid.x(), placement_.centroid.y(), placement_.floor_z);
       pose.root_rotation = Vector3d(0, 0, placement_.yaw_rad + yaw_offset);
       const double arm = arm_deg * M_PI / 180.0;
-      pose.dofs[kTjLeftShoulder] = {0.0, arm, 0.0};
-      pose.dofs[kTjRightShoulder] = {0.0, -arm, 0.0};
+      pose.dofs[kJointLeftShoulder] = {0.0, arm, 0.0};
+      pose.dofs[kJointRightShoulder] = {0.0, -arm, 0.0};
       BodyShape shape = shape_;
       candidate.fit = FitTemplateToSilhouettes(body_, observations, hypothesis_options, &shape, &pose);
       Evaluate(shape_, masks, use, &candidate);

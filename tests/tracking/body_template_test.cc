@@ -9,6 +9,7 @@
 #include "core/mesh_io.h"
 #include "core/mesh_ops.h"
 #include "core/mesh_validation.h"
+#include "studio/actor.h"
 #include "tests/support/test_support.h"
 #include "tracking/motion_io.h"
 
@@ -31,21 +32,38 @@ TemplatePose SomePose() {
   TemplatePose pose;
   pose.root_translation = Eigen::Vector3d(0.3, -0.2, 0.05);
   pose.root_rotation = Eigen::Vector3d(0.0, 0.1, 1.2);
-  pose.dofs[kTjSpine] = {-0.2, 0.05, 0.1};
-  pose.dofs[kTjLeftShoulder] = {0.3, 1.2, 0.1};
-  pose.dofs[kTjLeftElbow] = {1.0, 0, 0};
-  pose.dofs[kTjRightHip] = {0.8, 0.1, 0.0};
-  pose.dofs[kTjRightKnee] = {-1.1, 0, 0};
-  pose.dofs[kTjHead] = {0.2, 0.0, 0.4};
+  pose.dofs[kJointSpine] = {-0.2, 0.05, 0.1};
+  pose.dofs[kJointLeftShoulder] = {0.3, 1.2, 0.1};
+  pose.dofs[kJointLeftElbow] = {1.0, 0, 0};
+  pose.dofs[kJointRightHip] = {0.8, 0.1, 0.0};
+  pose.dofs[kJointRightKnee] = {-1.1, 0, 0};
+  pose.dofs[kJointHead] = {0.2, 0.0, 0.4};
   return pose;
 }
 
-TEST(BodyTemplate, HasThirtySevenDofsAndStudioJointNames) {
+// The template and the studio actor stand on the same body: at 1.75 m with the arms 40 degrees
+// from the vertical, the actor's skeleton has the template's joints, parents and rest pose.
+TEST(BodyTemplate, StandsOnTheSameBodyAsTheStudioActor) {
+  const BodyTemplate body;
+  StudioActorOptions options;
+  options.height_m = 1.75;
+  options.arm_angle_deg = 40.0;
+  const Skeleton skeleton = MakeStudioSkeleton(options);
+  const std::vector<Eigen::Vector3d> rest = skeleton.RestPositions();
+  ASSERT_EQ(rest.size(), static_cast<std::size_t>(kNumTemplateJoints));
+  for (int j = 0; j < kNumTemplateJoints; ++j) {
+    EXPECT_EQ(skeleton.joints[j].name, body.joint_names()[j]);
+    EXPECT_EQ(skeleton.joints[j].parent, body.parents()[j]);
+    EXPECT_LT((rest[j] - body.generic_rest()[j]).norm(), 1e-12) << body.joint_names()[j];
+  }
+}
+
+TEST(BodyTemplate, HasThirtySevenDofsAndTheBodysJointNames) {
   const BodyTemplate body;
   EXPECT_EQ(body.num_dofs(), 37);
   ASSERT_EQ(body.joint_names().size(), static_cast<std::size_t>(kNumTemplateJoints));
-  EXPECT_EQ(body.joint_names()[kTjLeftElbow], "left_elbow");
-  EXPECT_EQ(body.joint_names()[kTjRightToe], "right_toe");
+  EXPECT_EQ(body.joint_names()[kJointLeftElbow], "left_elbow");
+  EXPECT_EQ(body.joint_names()[kJointRightToe], "right_toe");
 }
 
 TEST(BodyTemplate, EverySegmentIsWatertightAndOutward) {
@@ -88,14 +106,14 @@ TEST(BodyTemplate, ForwardKinematicsMovesSegmentsRigidly) {
   // The root moves by its translation at rest rotation.
   TemplatePose shifted;
   shifted.root_translation = Eigen::Vector3d(0.1, 0.2, 0.3);
-  EXPECT_NEAR((body.JointPositions(shape, shifted)[kTjPelvis] - rest[kTjPelvis] - shifted.root_translation).norm(), 0, 1e-12);
+  EXPECT_NEAR((body.JointPositions(shape, shifted)[kJointPelvis] - rest[kJointPelvis] - shifted.root_translation).norm(), 0, 1e-12);
   // A 90-degree knee flexion makes the shank perpendicular to the thigh.
   TemplatePose knee;
-  knee.dofs[kTjLeftKnee] = {-M_PI / 2, 0, 0};
+  knee.dofs[kJointLeftKnee] = {-M_PI / 2, 0, 0};
   const auto kj = body.JointPositions(shape, knee);
-  const Eigen::Vector3d thigh = (kj[kTjLeftKnee] - kj[kTjLeftHip]).normalized();
-  const Eigen::Vector3d shank = (kj[kTjLeftAnkle] - kj[kTjLeftKnee]).normalized();
-  const double rest_angle = std::acos(((rest[kTjLeftKnee] - rest[kTjLeftHip]).normalized()).dot((rest[kTjLeftAnkle] - rest[kTjLeftKnee]).normalized()));
+  const Eigen::Vector3d thigh = (kj[kJointLeftKnee] - kj[kJointLeftHip]).normalized();
+  const Eigen::Vector3d shank = (kj[kJointLeftAnkle] - kj[kJointLeftKnee]).normalized();
+  const double rest_angle = std::acos(((rest[kJointLeftKnee] - rest[kJointLeftHip]).normalized()).dot((rest[kJointLeftAnkle] - rest[kJointLeftKnee]).normalized()));
   EXPECT_NEAR(std::acos(thigh.dot(shank)), M_PI / 2, rest_angle + 1e-6);
   EXPECT_LT(shank.y(), 0.0);  // the shank folds backwards
   // Vertices within a segment keep their mutual distances.
@@ -114,8 +132,8 @@ TEST(BodyTemplate, ShapeScalesLengthsAndGirths) {
   const auto rest0 = body.RestPositions(shape);
   shape.length_scale[int(BodySegment::kRightForearm)] = 1.25;
   const auto rest1 = body.RestPositions(shape);
-  EXPECT_NEAR((rest1[kTjRightWrist] - rest1[kTjRightElbow]).norm(), 1.25 * (rest0[kTjRightWrist] - rest0[kTjRightElbow]).norm(), 1e-12);
-  EXPECT_NEAR((rest1[kTjLeftWrist] - rest1[kTjLeftElbow]).norm(), (rest0[kTjLeftWrist] - rest0[kTjLeftElbow]).norm(), 1e-12);
+  EXPECT_NEAR((rest1[kJointRightWrist] - rest1[kJointRightElbow]).norm(), 1.25 * (rest0[kJointRightWrist] - rest0[kJointRightElbow]).norm(), 1e-12);
+  EXPECT_NEAR((rest1[kJointLeftWrist] - rest1[kJointLeftElbow]).norm(), (rest0[kJointLeftWrist] - rest0[kJointLeftElbow]).norm(), 1e-12);
   BodyShape thick;
   thick.girth_scale[int(BodySegment::kHead)] = 1.5;
   thick.length_scale[int(BodySegment::kHead)] = 1.5;

@@ -36,11 +36,11 @@ TemplatePose KnownPose() {
   TemplatePose pose;
   pose.root_translation = Vector3d(0.4, -0.3, 0.0);
   pose.root_rotation = Vector3d(0, 0, 0.6);
-  pose.dofs[kTjLeftElbow] = {0.5, 0, 0};
-  pose.dofs[kTjRightElbow] = {0.3, 0, 0};
-  pose.dofs[kTjLeftHip] = {0.25, 0, 0};
-  pose.dofs[kTjLeftKnee] = {-0.4, 0, 0};
-  pose.dofs[kTjSpine] = {0.1, 0, 0.1};
+  pose.dofs[kJointLeftElbow] = {0.5, 0, 0};
+  pose.dofs[kJointRightElbow] = {0.3, 0, 0};
+  pose.dofs[kJointLeftHip] = {0.25, 0, 0};
+  pose.dofs[kJointLeftKnee] = {-0.4, 0, 0};
+  pose.dofs[kJointSpine] = {0.1, 0, 0.1};
   return pose;
 }
 
@@ -62,7 +62,7 @@ double MeanJointError(const BodyTemplate& body, const ScanRegistration& registra
   double sum = 0;
   int n = 0;
   for (int j = 0; j < kNumTemplateJoints; ++j) {
-    if (j == kTjHeadEnd || j == kTjLeftHandEnd || j == kTjRightHandEnd || j == kTjLeftToe || j == kTjRightToe) continue;
+    if (j == kJointHeadEnd || j == kJointLeftHandEnd || j == kJointRightHandEnd || j == kJointLeftToe || j == kJointRightToe) continue;
     sum += (fitted[j] - scan_from_world * truth[j]).norm();
     ++n;
   }
@@ -113,12 +113,12 @@ TEST(ScanRegistration, TPoseScanWithHolesAndASeparateHairPiece) {
   // T-pose: upper arms horizontal (rotation about the forward axis), elbows straight.
   TemplatePose pose;
   pose.root_translation = Vector3d(-0.2, 0.1, 0.0);
-  pose.dofs[kTjLeftShoulder] = {0.0, 50.0 * M_PI / 180.0, 0.0};
-  pose.dofs[kTjRightShoulder] = {0.0, -50.0 * M_PI / 180.0, 0.0};
+  pose.dofs[kJointLeftShoulder] = {0.0, 50.0 * M_PI / 180.0, 0.0};
+  pose.dofs[kJointRightShoulder] = {0.0, -50.0 * M_PI / 180.0, 0.0};
   const BodyShape shape = BodyShape::Uniform(1.8);
   const Mesh posed = fine.PosedMesh(shape, pose);
   const auto truth = fine.JointPositions(shape, pose);
-  ASSERT_NEAR(truth[kTjLeftElbow].z(), truth[kTjLeftShoulder].z(), 0.03);  // really a T-pose
+  ASSERT_NEAR(truth[kJointLeftElbow].z(), truth[kJointLeftShoulder].z(), 0.03);  // really a T-pose
   // Holes: drop every face whose centroid lies in a band around the belly or on the left shin.
   Mesh scan;
   scan.vertices = posed.vertices;
@@ -131,7 +131,7 @@ TEST(ScanRegistration, TPoseScanWithHolesAndASeparateHairPiece) {
     if (!belly && !shin) faces.push_back(posed.faces.row(f).transpose());
   }
   // A separate hair piece: a flat box on top of the head.
-  const Mesh hair = MakeBox(truth[kTjHeadEnd] + Vector3d(-0.09, -0.1, -0.02), truth[kTjHeadEnd] + Vector3d(0.09, 0.06, 0.03));
+  const Mesh hair = MakeBox(truth[kJointHeadEnd] + Vector3d(-0.09, -0.1, -0.02), truth[kJointHeadEnd] + Vector3d(0.09, 0.06, 0.03));
   const int offset = scan.num_vertices();
   scan.vertices.conservativeResize(offset + hair.num_vertices(), 3);
   scan.vertices.bottomRows(hair.num_vertices()) = hair.vertices;
@@ -142,7 +142,7 @@ TEST(ScanRegistration, TPoseScanWithHolesAndASeparateHairPiece) {
 
   const ScanRegistration registration = RegisterTemplateToScan(body, scan);
   const auto fitted = body.JointPositions(registration.shape, registration.pose);
-  for (int j : {int(kTjLeftElbow), int(kTjRightElbow), int(kTjLeftWrist), int(kTjRightWrist), int(kTjLeftKnee), int(kTjHead)})
+  for (int j : {int(kJointLeftElbow), int(kJointRightElbow), int(kJointLeftWrist), int(kJointRightWrist), int(kJointLeftKnee), int(kJointHead)})
     EXPECT_LT((fitted[j] - truth[j]).norm(), 0.04) << body.joint_names()[j];
 }
 
@@ -176,7 +176,7 @@ TEST(ScanRegistration, RegistrationRoundTripsThroughCorrespondencesJson) {
     EXPECT_DOUBLE_EQ(back.shape.girth_scale[s], registration.shape.girth_scale[s]);
   }
   EXPECT_TRUE(back.pose.root_translation.isApprox(registration.pose.root_translation));
-  EXPECT_DOUBLE_EQ(back.pose.dofs[kTjLeftElbow][0], 0.5);
+  EXPECT_DOUBLE_EQ(back.pose.dofs[kJointLeftElbow][0], 0.5);
   EXPECT_DOUBLE_EQ(back.rms_residual_m, 0.012);
 }
 
@@ -184,7 +184,7 @@ TEST(PoseFromJoints, RecoversAPoseFromItsJointsAndRotations) {
   const BodyTemplate body;
   const BodyShape shape = KnownShape();
   TemplatePose truth = KnownPose();
-  truth.dofs[kTjHead] = {0.1, 0.0, 0.5};  // a head turn: only observable through the rotations
+  truth.dofs[kJointHead] = {0.1, 0.0, 0.5};  // a head turn: only observable through the rotations
   const std::vector<Vector3d> joints = body.JointPositions(shape, truth);
   const auto world = WorldFromJoint(body.MakeSkeleton(shape), body.ToPose(truth));
   std::vector<Eigen::Quaterniond> rotations;
@@ -192,7 +192,7 @@ TEST(PoseFromJoints, RecoversAPoseFromItsJointsAndRotations) {
   const TemplatePose fitted = FitPoseToJoints(body, shape, joints, &rotations, TemplatePose());
   const std::vector<Vector3d> again = body.JointPositions(shape, fitted);
   for (int j = 0; j < kNumTemplateJoints; ++j) EXPECT_LT((again[j] - joints[j]).norm(), 1e-4) << j;
-  EXPECT_NEAR(fitted.dofs[kTjHead][2], 0.5, 1e-3);
+  EXPECT_NEAR(fitted.dofs[kJointHead][2], 0.5, 1e-3);
 }
 
 TEST(CorrespondencePlacement, StudioActorGets140To220PairsOnAll16Segments) {
@@ -205,8 +205,8 @@ TEST(CorrespondencePlacement, StudioActorGets140To220PairsOnAll16Segments) {
   // The studio actor's rest skeleton is the template's generic one: joints should agree.
   const auto joints = body.JointPositions(registration.shape, registration.pose);
   const auto truth = actor.skeleton.RestPositions();
-  EXPECT_LT((joints[kTjLeftElbow] - truth[kTjLeftElbow]).norm(), 0.05);
-  EXPECT_LT((joints[kTjRightKnee] - truth[kTjRightKnee]).norm(), 0.05);
+  EXPECT_LT((joints[kJointLeftElbow] - truth[kJointLeftElbow]).norm(), 0.05);
+  EXPECT_LT((joints[kJointRightKnee] - truth[kJointRightKnee]).norm(), 0.05);
 
   const Mesh template_mesh = body.PosedMesh(registration.shape, registration.pose);
   CorrespondencePlacementOptions options;
@@ -230,7 +230,7 @@ TEST(CorrespondencePlacement, StudioActorGets140To220PairsOnAll16Segments) {
   }
   EXPECT_EQ(segments.size(), static_cast<std::size_t>(kNumBodySegments));
   // Markers keep the clearance from the joints at the ends of the limbs (along the limb).
-  const Vector3d elbow = joints[kTjLeftElbow], shoulder = joints[kTjLeftShoulder];
+  const Vector3d elbow = joints[kJointLeftElbow], shoulder = joints[kJointLeftShoulder];
   const Vector3d axis = (elbow - shoulder).normalized();
   for (const CorrespondencePair& p : pairs.pairs) {
     if (p.segment != "left_upper_arm") continue;

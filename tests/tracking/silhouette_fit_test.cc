@@ -26,15 +26,15 @@ TemplatePose TruePose() {
   TemplatePose pose;
   pose.root_translation = Eigen::Vector3d(0.05, -0.1, 0.0);
   pose.root_rotation = Eigen::Vector3d(0, 0, 0.5);
-  pose.dofs[kTjSpine] = {-0.15, 0.05, 0.1};
-  pose.dofs[kTjLeftShoulder] = {0.4, 0.9, 0.0};
-  pose.dofs[kTjLeftElbow] = {0.8, 0, 0};
-  pose.dofs[kTjRightShoulder] = {-0.3, -0.5, 0.0};
-  pose.dofs[kTjRightElbow] = {0.4, 0, 0};
-  pose.dofs[kTjLeftHip] = {0.5, 0.1, 0.0};
-  pose.dofs[kTjLeftKnee] = {-0.7, 0, 0};
-  pose.dofs[kTjRightHip] = {-0.1, -0.1, 0.0};
-  pose.dofs[kTjHead] = {0.1, 0.0, 0.3};
+  pose.dofs[kJointSpine] = {-0.15, 0.05, 0.1};
+  pose.dofs[kJointLeftShoulder] = {0.4, 0.9, 0.0};
+  pose.dofs[kJointLeftElbow] = {0.8, 0, 0};
+  pose.dofs[kJointRightShoulder] = {-0.3, -0.5, 0.0};
+  pose.dofs[kJointRightElbow] = {0.4, 0, 0};
+  pose.dofs[kJointLeftHip] = {0.5, 0.1, 0.0};
+  pose.dofs[kJointLeftKnee] = {-0.7, 0, 0};
+  pose.dofs[kJointRightHip] = {-0.1, -0.1, 0.0};
+  pose.dofs[kJointHead] = {0.1, 0.0, 0.3};
   return pose;
 }
 
@@ -94,8 +94,8 @@ TEST(SilhouetteFit, InitialisesShapeAndPoseFromTheVisualHull) {
   TemplatePose truth;
   truth.root_translation = Eigen::Vector3d(0.2, 0.1, 0.0);
   truth.root_rotation = Eigen::Vector3d(0, 0, 2.2);
-  truth.dofs[kTjLeftShoulder] = {0.0, 0.8, 0.0};  // nearly a T-pose
-  truth.dofs[kTjRightShoulder] = {0.0, -0.8, 0.0};
+  truth.dofs[kJointLeftShoulder] = {0.0, 0.8, 0.0};  // nearly a T-pose
+  truth.dofs[kJointRightShoulder] = {0.0, -0.8, 0.0};
   const Mesh mesh = body.PosedMesh(truth_shape, truth);
   std::vector<Image> masks;
   for (const Camera& camera : rig.cameras) masks.push_back(RasterizeSilhouette(mesh, camera, 1));

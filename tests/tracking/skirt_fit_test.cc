@@ -33,9 +33,9 @@ TemplatePose StandingPose() {
   TemplatePose pose;
   pose.root_translation = Eigen::Vector3d(0.1, -0.05, 0.0);
   pose.root_rotation = Eigen::Vector3d(0, 0, 0.7);
-  pose.dofs[kTjLeftShoulder] = {0.2, 0.5, 0.0};
-  pose.dofs[kTjRightShoulder] = {-0.1, -0.4, 0.0};
-  pose.dofs[kTjLeftElbow] = {0.5, 0, 0};
+  pose.dofs[kJointLeftShoulder] = {0.2, 0.5, 0.0};
+  pose.dofs[kJointRightShoulder] = {-0.1, -0.4, 0.0};
+  pose.dofs[kJointLeftElbow] = {0.5, 0, 0};
   return pose;
 }
 

@@ -59,17 +59,17 @@ TEST(TemplateMotion, BvhMotionStartsAtTheReferencePose) {
   const Skeleton skeleton = body.MakeSkeleton(shape);
   const auto ref = JointPositions(skeleton, body.ToPose(reference));
   const auto p0 = JointPositions(skeleton, poses[0]);
-  EXPECT_LT((p0[kTjPelvis] - ref[kTjPelvis]).head<2>().norm(), 1e-9);
+  EXPECT_LT((p0[kJointPelvis] - ref[kJointPelvis]).head<2>().norm(), 1e-9);
   // T-pose at frame 0: the left arm points to the actor's left, which is -y when facing -x.
-  EXPECT_GT(Bone(p0, kTjLeftShoulder, kTjLeftElbow).dot(Vector3d(0, -1, 0)), 1 - 1e-9);
+  EXPECT_GT(Bone(p0, kJointLeftShoulder, kJointLeftElbow).dot(Vector3d(0, -1, 0)), 1 - 1e-9);
   // Frame 1: left upper arm down, forearm forwards (-x), left thigh 45 degrees forwards.
   const auto p1 = JointPositions(skeleton, poses[1]);
-  EXPECT_GT(Bone(p1, kTjLeftShoulder, kTjLeftElbow).dot(Vector3d(0, 0, -1)), 1 - 1e-9);
-  EXPECT_GT(Bone(p1, kTjLeftElbow, kTjLeftWrist).dot(Vector3d(-1, 0, 0)), 1 - 1e-9);
-  EXPECT_GT(Bone(p1, kTjLeftHip, kTjLeftKnee).dot(Vector3d(-1, 0, -1).normalized()), 1 - 1e-9);
+  EXPECT_GT(Bone(p1, kJointLeftShoulder, kJointLeftElbow).dot(Vector3d(0, 0, -1)), 1 - 1e-9);
+  EXPECT_GT(Bone(p1, kJointLeftElbow, kJointLeftWrist).dot(Vector3d(-1, 0, 0)), 1 - 1e-9);
+  EXPECT_GT(Bone(p1, kJointLeftHip, kJointLeftKnee).dot(Vector3d(-1, 0, -1).normalized()), 1 - 1e-9);
   // The BVH root moves 10 cm along its +x (the actor's left): the leg-length ratio scales it.
-  EXPECT_NEAR((p1[kTjPelvis] - p0[kTjPelvis]).norm(), 0.1 * info.translation_scale * 100.0, 1e-9);
-  EXPECT_GT((p1[kTjPelvis] - p0[kTjPelvis]).dot(Vector3d(0, -1, 0)), 0.0);
+  EXPECT_NEAR((p1[kJointPelvis] - p0[kJointPelvis]).norm(), 0.1 * info.translation_scale * 100.0, 1e-9);
+  EXPECT_GT((p1[kJointPelvis] - p0[kJointPelvis]).dot(Vector3d(0, -1, 0)), 0.0);
 }
 
 // Writes correspondences.json pairing every 3rd template triangle with the same scan triangle.
