@@ -24,19 +24,20 @@
 namespace confluent {
 
 void CalibrateOptions::Check() const {
-  auto fail = [](const std::string& what) { throw UsageError("CalibrateOptions: " + what); };
-  if (reference_camera < 0) fail("reference_camera must be >= 0");
-  if (max_intrinsic_views < 1) fail("max_intrinsic_views must be >= 1");
-  if (!(distinct_view_px >= 0.0)) fail("distinct_view_px must be >= 0");
-  if (min_views_full_model < 1) fail("min_views_full_model must be >= 1");
-  if (!(outlier_factor > 1.0)) fail("outlier_factor must be > 1");
-  if (!(outlier_min_rms_px >= 0.0)) fail("outlier_min_rms_px must be >= 0");
-  if (!(consensus_rotation_deg > 0.0 && consensus_rotation_deg < 90.0)) fail("consensus_rotation_deg must be in (0, 90)");
-  if (min_shared_frames < 1) fail("min_shared_frames must be >= 1");
-  if (max_joint_frames < 1) fail("max_joint_frames must be >= 1");
-  if (!(huber_px > 0.0)) fail("huber_px must be > 0");
-  if (max_iterations < 0) fail("max_iterations must be >= 0");
-  if (num_threads < 1) fail("num_threads must be >= 1");
+  const std::string owner = "CalibrateOptions.";
+  RequireOption(reference_camera >= 0, owner + "reference_camera", reference_camera, ">= 0");
+  RequireOption(max_intrinsic_views >= 1, owner + "max_intrinsic_views", max_intrinsic_views, ">= 1");
+  RequireOption(distinct_view_px >= 0.0, owner + "distinct_view_px", distinct_view_px, ">= 0");
+  RequireOption(min_views_full_model >= 1, owner + "min_views_full_model", min_views_full_model, ">= 1");
+  RequireOption(outlier_factor > 1.0, owner + "outlier_factor", outlier_factor, "> 1");
+  RequireOption(outlier_min_rms_px >= 0.0, owner + "outlier_min_rms_px", outlier_min_rms_px, ">= 0");
+  RequireOption(consensus_rotation_deg > 0.0 && consensus_rotation_deg < 90.0, owner + "consensus_rotation_deg",
+                consensus_rotation_deg, "in (0, 90)");
+  RequireOption(min_shared_frames >= 1, owner + "min_shared_frames", min_shared_frames, ">= 1");
+  RequireOption(max_joint_frames >= 1, owner + "max_joint_frames", max_joint_frames, ">= 1");
+  RequireOption(huber_px > 0.0, owner + "huber_px", huber_px, "> 0");
+  RequireOption(max_iterations >= 0, owner + "max_iterations", max_iterations, ">= 0");
+  RequireOption(num_threads >= 1, owner + "num_threads", num_threads, ">= 1");
 }
 
 namespace calibrate_internal {

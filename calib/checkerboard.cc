@@ -20,11 +20,10 @@ std::vector<Eigen::Vector3d> CheckerboardSpec::CornersInBoard() const {
 }
 
 void CheckerboardSpec::Check() const {
-  if (cols < 2 || rows < 2)
-    throw UsageError("checkerboard: needs at least 2x2 inner corners, got " + std::to_string(cols) + "x" +
-                     std::to_string(rows));
-  if (!(square_m > 0.0) || !std::isfinite(square_m))
-    throw UsageError("checkerboard: square size must be positive, got " + std::to_string(square_m) + " m");
+  RequireOption(cols >= 2, "CheckerboardSpec.cols", cols, ">= 2 (inner corners)");
+  RequireOption(rows >= 2, "CheckerboardSpec.rows", rows, ">= 2 (inner corners)");
+  RequireOption(square_m > 0.0 && std::isfinite(square_m), "CheckerboardSpec.square_m", square_m,
+                "> 0 and finite (metres)");
 }
 
 void ParseBoardSize(const std::string& text, int* cols, int* rows) {
@@ -40,10 +39,11 @@ void ParseBoardSize(const std::string& text, int* cols, int* rows) {
 }
 
 void CheckerboardDetectOptions::Check() const {
-  if (subpix_half_window_px < 0) throw UsageError("CheckerboardDetectOptions: subpix_half_window_px must be >= 0");
-  if (max_detection_width_px < 0) throw UsageError("CheckerboardDetectOptions: max_detection_width_px must be >= 0");
-  if (!(min_corner_spacing_px >= 0.0)) throw UsageError("CheckerboardDetectOptions: min_corner_spacing_px must be >= 0");
-  if (max_unfitted_corners < 0) throw UsageError("CheckerboardDetectOptions: max_unfitted_corners must be >= 0");
+  const std::string owner = "CheckerboardDetectOptions.";
+  RequireOption(subpix_half_window_px >= 0, owner + "subpix_half_window_px", subpix_half_window_px, ">= 0");
+  RequireOption(max_detection_width_px >= 0, owner + "max_detection_width_px", max_detection_width_px, ">= 0");
+  RequireOption(min_corner_spacing_px >= 0.0, owner + "min_corner_spacing_px", min_corner_spacing_px, ">= 0");
+  RequireOption(max_unfitted_corners >= 0, owner + "max_unfitted_corners", max_unfitted_corners, ">= 0");
 }
 
 void HalfTurnCorners(std::vector<Eigen::Vector2d>* corners_px) {

@@ -35,10 +35,13 @@ Eigen::Vector3d ConvergencePoint(const Rig& rig) {
 }  // namespace
 
 void RigCheckOptions::Check() const {
-  if (!(max_plausible_extent_m > min_plausible_extent_m && min_plausible_extent_m > 0))
-    throw UsageError("RigCheckOptions: need 0 < min_plausible_extent_m < max_plausible_extent_m");
-  if (!(max_axis_miss_angle_deg > 0 && max_axis_miss_angle_deg < 180))
-    throw UsageError("RigCheckOptions: max_axis_miss_angle_deg must be in (0, 180)");
+  const std::string owner = "RigCheckOptions.";
+  RequireOption(min_plausible_extent_m > 0, owner + "min_plausible_extent_m", min_plausible_extent_m, "> 0");
+  RequireOptions(max_plausible_extent_m > min_plausible_extent_m, owner + "min_plausible_extent_m",
+                 min_plausible_extent_m, owner + "max_plausible_extent_m", max_plausible_extent_m,
+                 "min_plausible_extent_m < max_plausible_extent_m");
+  RequireOption(max_axis_miss_angle_deg > 0 && max_axis_miss_angle_deg < 180, owner + "max_axis_miss_angle_deg",
+                max_axis_miss_angle_deg, "in (0, 180)");
 }
 
 RigCheckReport CheckRig(const Rig& rig, const RigCheckOptions& options) {
@@ -115,8 +118,9 @@ std::string RigCheckReport::ToString() const {
 }
 
 void VisualHullOptions::Check() const {
-  if (grid_resolution < 8 || grid_resolution > 1024) throw UsageError("VisualHullOptions: grid_resolution must be in [8, 1024]");
-  if (!(box_half_size_m >= 0)) throw UsageError("VisualHullOptions: box_half_size_m must be >= 0");
+  RequireOption(grid_resolution >= 8 && grid_resolution <= 1024, "VisualHullOptions.grid_resolution", grid_resolution,
+                "in [8, 1024]");
+  RequireOption(box_half_size_m >= 0, "VisualHullOptions.box_half_size_m", box_half_size_m, ">= 0");
 }
 
 namespace {

@@ -10,9 +10,10 @@
 namespace confluent {
 
 void SyntheticBoardOptions::Check() const {
-  if (supersampling < 1) throw UsageError("SyntheticBoardOptions: supersampling must be >= 1");
-  if (!(noise_sigma >= 0.0)) throw UsageError("SyntheticBoardOptions: noise_sigma must be >= 0");
-  if (!(border_squares >= 0.0)) throw UsageError("SyntheticBoardOptions: border_squares must be >= 0");
+  const std::string owner = "SyntheticBoardOptions.";
+  RequireOption(supersampling >= 1, owner + "supersampling", supersampling, ">= 1");
+  RequireOption(noise_sigma >= 0.0, owner + "noise_sigma", noise_sigma, ">= 0");
+  RequireOption(border_squares >= 0.0, owner + "border_squares", border_squares, ">= 0");
 }
 
 namespace {

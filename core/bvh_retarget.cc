@@ -90,7 +90,7 @@ struct UnitGuess {
 
 void BvhRetargetOptions::Check() const {
   if (up_axis != 'a' && up_axis != 'y' && up_axis != 'z')
-    throw UsageError(std::string("bvh up axis: expected auto, y or z, got '") + up_axis + "'");
+    throw UsageError(std::string("BvhRetargetOptions.up_axis = '") + up_axis + "': must be 'a' (auto), 'y' or 'z'");
 }
 
 std::map<std::string, std::string> GuessBvhJointMap(const Skeleton& bvh, const std::vector<std::string>& target_names) {

@@ -1,6 +1,7 @@
 #pragma once
 // Typed exceptions for bad external input (docs/ARCHITECTURE.md section 6). Only app/ catches them.
 
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
 
@@ -41,5 +42,12 @@ class UsageError : public Error {
 // For Options::Check(): throws UsageError "<field> = <value>: must be <rule>" unless `ok`,
 // e.g. RequireOption(iterations >= 0, "SilhouetteRefinementOptions.iterations", iterations, ">= 0").
 void RequireOption(bool ok, const std::string& field, double value, const std::string& rule);
+// The same for a vector value, printed "(x, y, z)":
+// RequireOption(colour.allFinite(), "ShadingOptions.background", {colour.x(), colour.y(), colour.z()}, "finite").
+void RequireOption(bool ok, const std::string& field, std::initializer_list<double> value, const std::string& rule);
+// For a rule between two fields: throws UsageError "<field_a> = <a> and <field_b> = <b>: must be <rule>"
+// unless `ok`, e.g. RequireOptions(near < far, "X.near_m", near, "X.far_m", far, "near_m < far_m").
+void RequireOptions(bool ok, const std::string& field_a, double a, const std::string& field_b, double b,
+                    const std::string& rule);
 
 }  // namespace confluent

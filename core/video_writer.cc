@@ -82,10 +82,11 @@ int WaitFor(pid_t pid) {
 }  // namespace
 
 void VideoWriterOptions::Check() const {
-  if (!(fps > 0.0) || fps > 1000.0) throw UsageError("video fps must be in (0, 1000], got " + std::to_string(fps));
-  if (crf < 0 || crf > 51) throw UsageError("video crf must be in 0..51, got " + std::to_string(crf));
-  if (preset.empty()) throw UsageError("video preset must not be empty");
-  if (ffmpeg.empty()) throw UsageError("ffmpeg executable name must not be empty");
+  const std::string owner = "VideoWriterOptions.";
+  RequireOption(fps > 0.0 && fps <= 1000.0, owner + "fps", fps, "in (0, 1000]");
+  RequireOption(crf >= 0 && crf <= 51, owner + "crf", crf, "in 0..51");
+  if (preset.empty()) throw UsageError(owner + "preset = '': must not be empty");
+  if (ffmpeg.empty()) throw UsageError(owner + "ffmpeg = '': must not be empty (the ffmpeg executable)");
 }
 
 struct VideoWriter::Impl {

@@ -15,11 +15,16 @@ namespace confluent {
 using Eigen::Vector3d;
 
 void CorrespondencePlacementOptions::Check() const {
-  if (!(joint_clearance_m >= 0) || !(metres_per_unit > 0)) throw UsageError("placement: clearance >= 0 and unit > 0 required");
-  if (limb_ring_markers < 3 || dense_ring_markers < 3) throw UsageError("placement: at least 3 markers per ring");
-  if (!(max_pair_distance_m > 0) || !(max_normal_angle_deg > 0 && max_normal_angle_deg <= 180))
-    throw UsageError("placement: max_pair_distance_m > 0 and max_normal_angle_deg in (0, 180] required");
-  if (!(side_margin_m >= 0) || !(manual_spacing_m >= 0)) throw UsageError("placement: margins must be >= 0");
+  const std::string owner = "CorrespondencePlacementOptions.";
+  RequireOption(joint_clearance_m >= 0, owner + "joint_clearance_m", joint_clearance_m, ">= 0");
+  RequireOption(metres_per_unit > 0, owner + "metres_per_unit", metres_per_unit, "> 0");
+  RequireOption(limb_ring_markers >= 3, owner + "limb_ring_markers", limb_ring_markers, ">= 3");
+  RequireOption(dense_ring_markers >= 3, owner + "dense_ring_markers", dense_ring_markers, ">= 3");
+  RequireOption(max_pair_distance_m > 0, owner + "max_pair_distance_m", max_pair_distance_m, "> 0");
+  RequireOption(max_normal_angle_deg > 0 && max_normal_angle_deg <= 180, owner + "max_normal_angle_deg",
+                max_normal_angle_deg, "in (0, 180]");
+  RequireOption(side_margin_m >= 0, owner + "side_margin_m", side_margin_m, ">= 0");
+  RequireOption(manual_spacing_m >= 0, owner + "manual_spacing_m", manual_spacing_m, ">= 0");
 }
 
 namespace {

@@ -48,16 +48,21 @@ Eigen::Vector3d CatmullRom(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
 }  // namespace
 
 void OrbitPathOptions::Check() const {
-  if (!center_in_world.allFinite()) throw UsageError("orbit centre must be finite");
-  if (!(radius_m >= 0.0) || !std::isfinite(radius_m)) throw UsageError("orbit radius_m must be >= 0");
-  if (!std::isfinite(height_m) || !std::isfinite(start_angle_deg) || !std::isfinite(sweep_deg))
-    throw UsageError("orbit height and angles must be finite");
-  if (num_frames < 1) throw UsageError("orbit num_frames must be >= 1, got " + std::to_string(num_frames));
-  if (width_px < 1 || height_px < 1) throw UsageError("orbit image size must be positive");
-  if (!(vertical_fov_deg > 0.0 && vertical_fov_deg < 179.0))
-    throw UsageError("orbit vertical_fov_deg must be in (0, 179)");
-  if (radius_m == 0.0 && std::abs(height_m - center_in_world.z()) < 1e-9)
-    throw UsageError("orbit camera would sit on its look-at point (radius 0 at the centre's height)");
+  const std::string owner = "OrbitPathOptions.";
+  const Eigen::Vector3d& center = center_in_world;
+  RequireOption(center.allFinite(), owner + "center_in_world", {center.x(), center.y(), center.z()}, "finite");
+  RequireOption(radius_m >= 0.0 && std::isfinite(radius_m), owner + "radius_m", radius_m, ">= 0 and finite");
+  RequireOption(std::isfinite(height_m), owner + "height_m", height_m, "finite");
+  RequireOption(std::isfinite(start_angle_deg), owner + "start_angle_deg", start_angle_deg, "finite");
+  RequireOption(std::isfinite(sweep_deg), owner + "sweep_deg", sweep_deg, "finite");
+  RequireOption(num_frames >= 1, owner + "num_frames", num_frames, ">= 1");
+  RequireOption(width_px >= 1, owner + "width_px", width_px, ">= 1");
+  RequireOption(height_px >= 1, owner + "height_px", height_px, ">= 1");
+  RequireOption(vertical_fov_deg > 0.0 && vertical_fov_deg < 179.0, owner + "vertical_fov_deg", vertical_fov_deg,
+                "in (0, 179)");
+  RequireOptions(!(radius_m == 0.0 && std::abs(height_m - center.z()) < 1e-9), owner + "radius_m", radius_m,
+                 owner + "height_m", height_m,
+                 "off the look-at point (radius 0 at center_in_world's height puts the camera on it)");
 }
 
 std::vector<Camera> OrbitPath(const OrbitPathOptions& options) {
@@ -96,9 +101,10 @@ OrbitPathOptions OrbitAroundCameras(const std::vector<Camera>& cameras, const Ei
 }
 
 void KeyCameraPathOptions::Check() const {
-  if (num_frames < 1) throw UsageError("camera path num_frames must be >= 1, got " + std::to_string(num_frames));
-  if (width_px < 0 || height_px < 0 || (width_px == 0) != (height_px == 0))
-    throw UsageError("camera path image size must be both 0 (keep) or both positive");
+  RequireOption(num_frames >= 1, "KeyCameraPathOptions.num_frames", num_frames, ">= 1");
+  RequireOptions(width_px >= 0 && height_px >= 0 && (width_px == 0) == (height_px == 0),
+                 "KeyCameraPathOptions.width_px", width_px, "KeyCameraPathOptions.height_px", height_px,
+                 "both 0 (keep) or both positive");
 }
 
 std::vector<int> KeyFrameIndices(int num_keys, const KeyCameraPathOptions& options) {

@@ -142,8 +142,9 @@ struct ClipPoint {
 }  // namespace
 
 void CpuRasterOptions::Check() const {
-  if (!(near_m > 0.0) || !std::isfinite(near_m)) throw UsageError("cpu raster near_m must be > 0");
-  if (!(far_m > near_m) || !std::isfinite(far_m)) throw UsageError("cpu raster far_m must be > near_m and finite");
+  RequireOption(near_m > 0.0 && std::isfinite(near_m), "CpuRasterOptions.near_m", near_m, "> 0 and finite");
+  RequireOptions(far_m > near_m && std::isfinite(far_m), "CpuRasterOptions.near_m", near_m, "CpuRasterOptions.far_m",
+                 far_m, "near_m < far_m < infinity");
 }
 
 CpuRasterizer::CpuRasterizer(const RowMatrixX3i& faces, int num_vertices, const CpuRasterOptions& options)

@@ -137,9 +137,9 @@ std::vector<Device> ListDevices(std::string* why_none) {
 }  // namespace
 
 void EglContextOptions::Check() const {
-  if (device_index < -1) throw UsageError("EglContextOptions::device_index: must be >= -1");
-  if (gl_major_version < 1 || gl_minor_version < 0)
-    throw UsageError("EglContextOptions::gl_major_version/gl_minor_version: must be a valid version");
+  RequireOption(device_index >= -1, "EglContextOptions.device_index", device_index, ">= -1 (-1 = first GPU device)");
+  RequireOption(gl_major_version >= 1, "EglContextOptions.gl_major_version", gl_major_version, ">= 1");
+  RequireOption(gl_minor_version >= 0, "EglContextOptions.gl_minor_version", gl_minor_version, ">= 0");
 }
 
 struct EglContext::Impl {

@@ -91,19 +91,24 @@ void main() {}
 }  // namespace
 
 void ProjectiveTextureOptions::Check() const {
-  if (best_k < 1 || best_k > 8)
-    throw UsageError("projective texture best_k must be in 1..8, got " + std::to_string(best_k));
-  if (!(depth_bias_m >= 0.0) || !std::isfinite(depth_bias_m)) throw UsageError("depth_bias_m must be >= 0");
-  if (!(feather_px >= 0.0) || !std::isfinite(feather_px)) throw UsageError("feather_px must be >= 0");
-  if (!(depth_edge_m > 0.0) || !std::isfinite(depth_edge_m)) throw UsageError("depth_edge_m must be > 0");
-  if (!(resolution_weight >= 0.0) || !std::isfinite(resolution_weight))
-    throw UsageError("resolution_weight must be >= 0");
-  if (!(grazing_cos >= 0.0 && grazing_cos <= 1.0)) throw UsageError("grazing_cos must be in [0, 1]");
-  if (!(visibility_scale > 0.0 && visibility_scale <= 1.0))
-    throw UsageError("visibility_scale must be in (0, 1], got " + std::to_string(visibility_scale));
-  if (visibility_faces < 0) throw UsageError("visibility_faces must be >= 0, got " + std::to_string(visibility_faces));
-  if (colour_balance_samples < 1) throw UsageError("colour_balance_samples must be >= 1");
-  if (!fallback_color.allFinite() || !background.allFinite()) throw UsageError("colours must be finite");
+  const std::string owner = "ProjectiveTextureOptions.";
+  RequireOption(best_k >= 1 && best_k <= 8, owner + "best_k", best_k, "in 1..8");
+  RequireOption(depth_bias_m >= 0.0 && std::isfinite(depth_bias_m), owner + "depth_bias_m", depth_bias_m,
+                ">= 0 and finite");
+  RequireOption(feather_px >= 0.0 && std::isfinite(feather_px), owner + "feather_px", feather_px, ">= 0 and finite");
+  RequireOption(depth_edge_m > 0.0 && std::isfinite(depth_edge_m), owner + "depth_edge_m", depth_edge_m,
+                "> 0 and finite");
+  RequireOption(resolution_weight >= 0.0 && std::isfinite(resolution_weight), owner + "resolution_weight",
+                resolution_weight, ">= 0 and finite");
+  RequireOption(grazing_cos >= 0.0 && grazing_cos <= 1.0, owner + "grazing_cos", grazing_cos, "in [0, 1]");
+  RequireOption(visibility_scale > 0.0 && visibility_scale <= 1.0, owner + "visibility_scale", visibility_scale,
+                "in (0, 1]");
+  RequireOption(visibility_faces >= 0, owner + "visibility_faces", visibility_faces, ">= 0");
+  RequireOption(colour_balance_samples >= 1, owner + "colour_balance_samples", colour_balance_samples, ">= 1");
+  RequireOption(fallback_color.allFinite(), owner + "fallback_color",
+                {fallback_color.x(), fallback_color.y(), fallback_color.z()}, "finite");
+  RequireOption(background.allFinite(), owner + "background", {background.x(), background.y(), background.z()},
+                "finite");
 }
 ProjectiveTexturer::Impl::Impl(const Mesh& mesh, const ProjectiveTextureOptions& texture_options,
                                const MeshRendererOptions& render_options)

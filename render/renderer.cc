@@ -62,23 +62,31 @@ RowMatrixX3d VertexNormals(const RowMatrixX3d& vertices, const RowMatrixX3i& fac
 
 void MeshRendererOptions::Check() const {
   context.Check();
-  if (!(near_m > 0.0) || !(far_m > near_m) || !std::isfinite(far_m))
-    throw UsageError("MeshRendererOptions: need 0 < near_m < far_m < infinity");
-  if (!(max_undistorted_scale >= 1.0) || max_undistorted_scale > 8.0)
-    throw UsageError("MeshRendererOptions::max_undistorted_scale: must be in [1, 8]");
-  if (distortion_supersampling < 1 || distortion_supersampling > 4)
-    throw UsageError("MeshRendererOptions::distortion_supersampling: must be in [1, 4]");
+  const std::string owner = "MeshRendererOptions.";
+  RequireOption(near_m > 0.0, owner + "near_m", near_m, "> 0");
+  RequireOptions(far_m > near_m && std::isfinite(far_m), owner + "near_m", near_m, owner + "far_m", far_m,
+                 "near_m < far_m < infinity");
+  RequireOption(max_undistorted_scale >= 1.0 && max_undistorted_scale <= 8.0, owner + "max_undistorted_scale",
+                max_undistorted_scale, "in [1, 8]");
+  RequireOption(distortion_supersampling >= 1 && distortion_supersampling <= 4, owner + "distortion_supersampling",
+                distortion_supersampling, "in [1, 4]");
 }
 
 void ShadingOptions::Check() const {
-  if (!light_direction_in_world.allFinite() || light_direction_in_world.norm() == 0.0)
-    throw UsageError("ShadingOptions::light_direction_in_world: must be a finite non-zero vector");
-  if (!std::isfinite(ambient) || !std::isfinite(diffuse) || ambient < 0.0 || diffuse < 0.0)
-    throw UsageError("ShadingOptions: ambient and diffuse must be finite and >= 0");
-  if (!default_albedo.allFinite() || !background.allFinite())
-    throw UsageError("ShadingOptions: default_albedo and background must be finite");
+  const std::string owner = "ShadingOptions.";
+  const Eigen::Vector3d& light = light_direction_in_world;
+  RequireOption(light.allFinite() && light.norm() != 0.0, owner + "light_direction_in_world",
+                {light.x(), light.y(), light.z()}, "a finite non-zero vector");
+  RequireOption(std::isfinite(ambient) && ambient >= 0.0, owner + "ambient", ambient, ">= 0 and finite");
+  RequireOption(std::isfinite(diffuse) && diffuse >= 0.0, owner + "diffuse", diffuse, ">= 0 and finite");
+  RequireOption(default_albedo.allFinite(), owner + "default_albedo",
+                {default_albedo.x(), default_albedo.y(), default_albedo.z()}, "finite");
+  RequireOption(background.allFinite(), owner + "background", {background.x(), background.y(), background.z()},
+                "finite");
   if (color_type != PixelType::kUInt8 && color_type != PixelType::kFloat32)
-    throw UsageError("ShadingOptions::color_type: must be kUInt8 or kFloat32");
+    throw UsageError(owner + "color_type = '" +
+                     (color_type == PixelType::kUInt16 ? "kUInt16" : std::to_string(static_cast<int>(color_type))) +
+                     "': must be kUInt8 or kFloat32");
 }
 
 struct MeshRenderer::Impl {

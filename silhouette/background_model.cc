@@ -76,19 +76,24 @@ T Median(std::vector<T>* values) {
 }  // namespace
 
 void BackgroundModelOptions::Check() const {
-  auto require = [](bool ok, const char* message) {
-    if (!ok) throw UsageError(std::string("background model: ") + message);
-  };
-  require(min_spread >= kSpreadStep && min_spread <= 30, "min_spread must be within [0.125, 30] grey levels");
-  require(gradient_spread >= 0 && gradient_spread <= 2, "gradient_spread must be within [0, 2]");
-  require(chroma_relative >= 0 && chroma_relative <= 0.5, "chroma_relative must be within [0, 0.5]");
-  require(chroma_threshold > 0 && chroma_threshold <= 50, "chroma_threshold must be within (0, 50]");
-  require(brightness_threshold > 0 && brightness_threshold <= 50, "brightness_threshold must be within (0, 50]");
-  require(shadow_min_brightness >= 0 && shadow_min_brightness < 1, "shadow_min_brightness must be within [0, 1)");
-  require(highlight_max_brightness > 1 && highlight_max_brightness <= 8, "highlight_max_brightness must be within (1, 8]");
-  require(refine_frames >= 0 && refine_frames <= 1000, "refine_frames must be within [0, 1000]");
-  require(plate_weight > 0, "plate_weight must be positive");
-  require(learned_frames >= 3 && learned_frames <= 1001, "learned_frames must be within [3, 1001]");
+  const std::string owner = "BackgroundModelOptions.";
+  RequireOption(min_spread >= kSpreadStep && min_spread <= 30, owner + "min_spread", min_spread,
+                "in [0.125, 30] grey levels");
+  RequireOption(gradient_spread >= 0 && gradient_spread <= 2, owner + "gradient_spread", gradient_spread, "in [0, 2]");
+  RequireOption(chroma_relative >= 0 && chroma_relative <= 0.5, owner + "chroma_relative", chroma_relative,
+                "in [0, 0.5]");
+  RequireOption(chroma_threshold > 0 && chroma_threshold <= 50, owner + "chroma_threshold", chroma_threshold,
+                "in (0, 50]");
+  RequireOption(brightness_threshold > 0 && brightness_threshold <= 50, owner + "brightness_threshold",
+                brightness_threshold, "in (0, 50]");
+  RequireOption(shadow_min_brightness >= 0 && shadow_min_brightness < 1, owner + "shadow_min_brightness",
+                shadow_min_brightness, "in [0, 1)");
+  RequireOption(highlight_max_brightness > 1 && highlight_max_brightness <= 8, owner + "highlight_max_brightness",
+                highlight_max_brightness, "in (1, 8]");
+  RequireOption(refine_frames >= 0 && refine_frames <= 1000, owner + "refine_frames", refine_frames, "in [0, 1000]");
+  RequireOption(plate_weight > 0, owner + "plate_weight", plate_weight, "> 0");
+  RequireOption(learned_frames >= 3 && learned_frames <= 1001, owner + "learned_frames", learned_frames,
+                "in [3, 1001]");
 }
 
 BackgroundModel BackgroundModel::FromPlates(const std::vector<Image>& plates, const BackgroundModelOptions& options,

@@ -10,15 +10,14 @@
 namespace confluent {
 
 void ChromaKeyOptions::Check() const {
-  auto require = [](bool ok, const char* message) {
-    if (!ok) throw UsageError(std::string("chroma key: ") + message);
-  };
-  require(greenness >= 0 && greenness < 1, "greenness must be within [0, 1) (0 = automatic)");
-  require(auto_min_greenness > 0 && auto_min_greenness <= auto_max_greenness && auto_max_greenness < 1,
-          "auto greenness range must satisfy 0 < min <= max < 1");
-  require(screen_fraction > 0 && screen_fraction < 1, "screen_fraction must be within (0, 1)");
-  require(min_margin >= 0 && min_margin <= 100, "min_margin must be within [0, 100] grey levels");
-  require(detect_fraction > 0 && detect_fraction <= 1, "detect_fraction must be within (0, 1]");
+  const std::string owner = "ChromaKeyOptions.";
+  RequireOption(greenness >= 0 && greenness < 1, owner + "greenness", greenness, "in [0, 1) (0 = automatic)");
+  RequireOptions(auto_min_greenness > 0 && auto_min_greenness <= auto_max_greenness && auto_max_greenness < 1,
+                 owner + "auto_min_greenness", auto_min_greenness, owner + "auto_max_greenness", auto_max_greenness,
+                 "0 < auto_min_greenness <= auto_max_greenness < 1");
+  RequireOption(screen_fraction > 0 && screen_fraction < 1, owner + "screen_fraction", screen_fraction, "in (0, 1)");
+  RequireOption(min_margin >= 0 && min_margin <= 100, owner + "min_margin", min_margin, "in [0, 100] grey levels");
+  RequireOption(detect_fraction > 0 && detect_fraction <= 1, owner + "detect_fraction", detect_fraction, "in (0, 1]");
 }
 
 namespace {

@@ -13,17 +13,20 @@
 namespace confluent {
 
 void MaskCleanupOptions::Check() const {
-  auto require = [](bool ok, const char* message) {
-    if (!ok) throw UsageError(std::string("mask clean-up: ") + message);
-  };
-  require(work_scale == 0 || work_scale == 1 || work_scale == 2 || work_scale == 4,
-          "work_scale must be 0 (automatic), 1, 2 or 4");
-  require(open_radius_px >= 0 && open_radius_px <= 20, "open_radius_px must be within [0, 20]");
-  require(close_radius_px >= 0 && close_radius_px <= 20, "close_radius_px must be within [0, 20]");
-  require(connect_radius_px >= 0 && connect_radius_px <= 20, "connect_radius_px must be within [0, 20]");
-  require(min_part_fraction >= 0 && min_part_fraction <= 1, "min_part_fraction must be within [0, 1]");
-  require(max_part_distance_fraction >= 0, "max_part_distance_fraction must be non-negative");
-  require(max_hole_fraction >= 0 && max_hole_fraction <= 1, "max_hole_fraction must be within [0, 1]");
+  const std::string owner = "MaskCleanupOptions.";
+  RequireOption(work_scale == 0 || work_scale == 1 || work_scale == 2 || work_scale == 4, owner + "work_scale",
+                work_scale, "0 (automatic), 1, 2 or 4");
+  RequireOption(open_radius_px >= 0 && open_radius_px <= 20, owner + "open_radius_px", open_radius_px, "in [0, 20]");
+  RequireOption(close_radius_px >= 0 && close_radius_px <= 20, owner + "close_radius_px", close_radius_px,
+                "in [0, 20]");
+  RequireOption(connect_radius_px >= 0 && connect_radius_px <= 20, owner + "connect_radius_px", connect_radius_px,
+                "in [0, 20]");
+  RequireOption(min_part_fraction >= 0 && min_part_fraction <= 1, owner + "min_part_fraction", min_part_fraction,
+                "in [0, 1]");
+  RequireOption(max_part_distance_fraction >= 0, owner + "max_part_distance_fraction", max_part_distance_fraction,
+                ">= 0");
+  RequireOption(max_hole_fraction >= 0 && max_hole_fraction <= 1, owner + "max_hole_fraction", max_hole_fraction,
+                "in [0, 1]");
 }
 
 namespace {

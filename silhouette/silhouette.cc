@@ -40,14 +40,13 @@ void SilhouetteOptions::Check() const {
   background.Check();
   chroma.Check();
   cleanup.Check();
-  auto require = [](bool ok, const char* message) {
-    if (!ok) throw UsageError(std::string("silhouettes: ") + message);
-  };
-  require(empty_fraction >= 0 && empty_fraction < full_fraction && full_fraction <= 1,
-          "need 0 <= empty_fraction < full_fraction <= 1");
-  require(area_jump_fraction > 0 && area_jump_fraction <= 1, "area_jump_fraction must be within (0, 1]");
-  require(border_margin_px >= 0, "border_margin_px must be non-negative");
-  require(threads >= 1 && threads <= 256, "threads must be within [1, 256]");
+  const std::string owner = "SilhouetteOptions.";
+  RequireOptions(empty_fraction >= 0 && empty_fraction < full_fraction && full_fraction <= 1, owner + "empty_fraction",
+                 empty_fraction, owner + "full_fraction", full_fraction, "0 <= empty_fraction < full_fraction <= 1");
+  RequireOption(area_jump_fraction > 0 && area_jump_fraction <= 1, owner + "area_jump_fraction", area_jump_fraction,
+                "in (0, 1]");
+  RequireOption(border_margin_px >= 0, owner + "border_margin_px", border_margin_px, ">= 0");
+  RequireOption(threads >= 1 && threads <= 256, owner + "threads", threads, "in [1, 256]");
 }
 
 int SilhouetteSummary::num_flagged() const {

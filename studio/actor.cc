@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <numeric>
 #include <unordered_map>
+#include <utility>
 
 #include "core/error.h"
 #include "studio/actor_internal.h"
@@ -106,22 +107,18 @@ SkinWeights ComputeWeights(const Mesh& mesh, const Adjacency& adjacency, const s
 }  // namespace
 
 void StudioActorOptions::Check() const {
-  auto positive = [](double v, const char* name) {
-    if (!(v > 0.0) || !std::isfinite(v)) throw UsageError(std::string(name) + ": must be positive");
-  };
-  positive(height_m, "height_m");
-  positive(torso_girth, "torso_girth");
-  positive(arm_girth, "arm_girth");
-  positive(leg_girth, "leg_girth");
-  positive(head_size, "head_size");
-  if (height_m < 0.5 || height_m > 3.0) throw UsageError("height_m: must be within [0.5, 3] metres");
-  for (double g : {torso_girth, arm_girth, leg_girth, head_size})
-    if (g < 0.5 || g > 2.0) throw UsageError("girth and head-size factors must be within [0.5, 2]");
-  if (!(arm_angle_deg >= 15.0 && arm_angle_deg <= 80.0)) throw UsageError("arm_angle_deg: must be within [15, 80]");
-  if (target_triangles < 2000 || target_triangles > 5000000)
-    throw UsageError("target_triangles: must be within [2000, 5000000]");
-  if (smoothing_iterations < 0 || smoothing_iterations > 200)
-    throw UsageError("smoothing_iterations: must be within [0, 200]");
+  const std::string owner = "StudioActorOptions.";
+  // The ranges also refuse NaN and infinity.
+  RequireOption(height_m >= 0.5 && height_m <= 3.0, owner + "height_m", height_m, "in [0.5, 3] metres");
+  const std::pair<const char*, double> factors[] = {
+      {"torso_girth", torso_girth}, {"arm_girth", arm_girth}, {"leg_girth", leg_girth}, {"head_size", head_size}};
+  for (const auto& [name, factor] : factors)
+    RequireOption(factor >= 0.5 && factor <= 2.0, owner + name, factor, "in [0.5, 2]");
+  RequireOption(arm_angle_deg >= 15.0 && arm_angle_deg <= 80.0, owner + "arm_angle_deg", arm_angle_deg, "in [15, 80]");
+  RequireOption(target_triangles >= 2000 && target_triangles <= 5000000, owner + "target_triangles", target_triangles,
+                "in [2000, 5000000]");
+  RequireOption(smoothing_iterations >= 0 && smoothing_iterations <= 200, owner + "smoothing_iterations",
+                smoothing_iterations, "in [0, 200]");
 }
 
 Skeleton MakeStudioSkeleton(const StudioActorOptions& options) {

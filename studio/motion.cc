@@ -97,9 +97,10 @@ Eigen::Quaterniond EulerZYX(const Vector3d& deg) {
 }  // namespace
 
 void StudioMotionOptions::Check() const {
-  if (num_frames < 1) throw UsageError("frames: must be at least 1");
-  if (!(fps > 0.0) || !std::isfinite(fps)) throw UsageError("fps: must be positive");
-  if (!(speed > 0.0) || !std::isfinite(speed)) throw UsageError("speed: must be positive");
+  const std::string owner = "StudioMotionOptions.";
+  RequireOption(num_frames >= 1, owner + "num_frames", num_frames, ">= 1");
+  RequireOption(fps > 0.0 && std::isfinite(fps), owner + "fps", fps, "> 0 and finite");
+  RequireOption(speed > 0.0 && std::isfinite(speed), owner + "speed", speed, "> 0 and finite");
 }
 
 double DefaultPerformanceDuration() { return Keys().back().time_s; }

@@ -9,15 +9,22 @@
 namespace confluent {
 
 void StudioRigOptions::Check() const {
-  if (num_ring_cameras < 1 || num_ring_cameras > 256) throw UsageError("cameras: must be within [1, 256]");
-  if (num_heldout_cameras < 0 || num_heldout_cameras > 64) throw UsageError("heldout: must be within [0, 64]");
-  if (!(ring_radius_m > 0.5) || !(heldout_radius_m > 0.5)) throw UsageError("camera radius: must exceed 0.5 m");
-  if (width_px < 16 || height_px < 16 || width_px > 16384 || height_px > 16384)
-    throw UsageError("image size: width and height must be within [16, 16384] pixels");
-  if (!(focal_px >= 0.0) || !std::isfinite(focal_px)) throw UsageError("focal: must be positive (or 0 for automatic)");
-  if (!std::isfinite(k1) || std::abs(k1) > 0.5) throw UsageError("k1: must be within [-0.5, 0.5]");
-  if (!(intrinsics_jitter >= 0.0 && intrinsics_jitter < 0.2)) throw UsageError("intrinsics_jitter: must be within [0, 0.2)");
-  if (!target_in_world.allFinite()) throw UsageError("target: must be finite");
+  const std::string owner = "StudioRigOptions.";
+  RequireOption(num_ring_cameras >= 1 && num_ring_cameras <= 256, owner + "num_ring_cameras", num_ring_cameras,
+                "in [1, 256]");
+  RequireOption(num_heldout_cameras >= 0 && num_heldout_cameras <= 64, owner + "num_heldout_cameras",
+                num_heldout_cameras, "in [0, 64]");
+  RequireOption(ring_radius_m > 0.5, owner + "ring_radius_m", ring_radius_m, "> 0.5 metres");
+  RequireOption(heldout_radius_m > 0.5, owner + "heldout_radius_m", heldout_radius_m, "> 0.5 metres");
+  RequireOption(width_px >= 16 && width_px <= 16384, owner + "width_px", width_px, "in [16, 16384] pixels");
+  RequireOption(height_px >= 16 && height_px <= 16384, owner + "height_px", height_px, "in [16, 16384] pixels");
+  RequireOption(focal_px >= 0.0 && std::isfinite(focal_px), owner + "focal_px", focal_px,
+                ">= 0 and finite (0 = automatic)");
+  RequireOption(std::isfinite(k1) && std::abs(k1) <= 0.5, owner + "k1", k1, "in [-0.5, 0.5]");
+  RequireOption(intrinsics_jitter >= 0.0 && intrinsics_jitter < 0.2, owner + "intrinsics_jitter", intrinsics_jitter,
+                "in [0, 0.2)");
+  const Eigen::Vector3d& target = target_in_world;
+  RequireOption(target.allFinite(), owner + "target_in_world", {target.x(), target.y(), target.z()}, "finite");
 }
 
 Rig MakeStudioRig(const StudioRigOptions& options) {

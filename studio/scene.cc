@@ -165,10 +165,12 @@ void BoxBlur(std::vector<float>* grid, int n, int radius) {
 }  // namespace
 
 void StudioSceneOptions::Check() const {
-  if (!(half_size_m > 1.0 && half_size_m < 100.0)) throw UsageError("studio half size: must be within (1, 100) m");
-  if (!(wall_height_m > 0.5)) throw UsageError("wall height: must exceed 0.5 m");
-  if (!(tile_size_m > 0.01)) throw UsageError("tile size: must exceed 0.01 m");
-  if (floor_texture_px < 16 || floor_texture_px > 8192) throw UsageError("floor texture: must be within [16, 8192] px");
+  const std::string owner = "StudioSceneOptions.";
+  RequireOption(half_size_m > 1.0 && half_size_m < 100.0, owner + "half_size_m", half_size_m, "in (1, 100) metres");
+  RequireOption(wall_height_m > 0.5, owner + "wall_height_m", wall_height_m, "> 0.5 metres");
+  RequireOption(tile_size_m > 0.01, owner + "tile_size_m", tile_size_m, "> 0.01 metres");
+  RequireOption(floor_texture_px >= 16 && floor_texture_px <= 8192, owner + "floor_texture_px", floor_texture_px,
+                "in [16, 8192] pixels");
 }
 
 std::vector<TexturedMesh> MakeStudioScene(const StudioSceneOptions& o) {
@@ -192,10 +194,14 @@ std::vector<TexturedMesh> MakeStudioScene(const StudioSceneOptions& o) {
 }
 
 void FloorShadowOptions::Check() const {
-  if (!(half_size_m > 0.1) || !(cell_m > 0.0) || half_size_m / cell_m > 4000)
-    throw UsageError("floor shadow: bad grid size");
-  if (!(blur_m >= 0.0) || !(strength >= 0.0 && strength <= 1.0) || !(falloff_m > 0.0))
-    throw UsageError("floor shadow: blur must be >= 0, strength within [0, 1], falloff > 0");
+  const std::string owner = "FloorShadowOptions.";
+  RequireOption(half_size_m > 0.1, owner + "half_size_m", half_size_m, "> 0.1 metres");
+  RequireOption(cell_m > 0.0, owner + "cell_m", cell_m, "> 0");
+  RequireOptions(!(half_size_m / cell_m > 4000), owner + "half_size_m", half_size_m, owner + "cell_m", cell_m,
+                 "half_size_m / cell_m <= 4000");
+  RequireOption(blur_m >= 0.0, owner + "blur_m", blur_m, ">= 0");
+  RequireOption(strength >= 0.0 && strength <= 1.0, owner + "strength", strength, "in [0, 1]");
+  RequireOption(falloff_m > 0.0, owner + "falloff_m", falloff_m, "> 0");
 }
 
 float FloorShadow::At(double x, double y) const {

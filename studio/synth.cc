@@ -289,20 +289,27 @@ std::string OptionsJson(const StudioSynthOptions& o, const StudioSynthSummary& s
 }  // namespace
 
 void StudioSynthOptions::Check() const {
-  if (capture_dir.empty()) throw UsageError("--out: a capture folder is required");
+  const std::string owner = "StudioSynthOptions.";
+  if (capture_dir.empty()) throw UsageError(owner + "capture_dir = '': must name the capture folder to write (--out)");
   if (actor_sequence_dir.empty() && actor_mesh_path.empty()) actor.Check();
   if (actor_mesh_path.empty() != actor_skin_path.empty())
-    throw UsageError("--actor-mesh and --actor-skin go together (a rigged actor needs both)");
+    throw UsageError(owner + "actor_mesh_path = '" + actor_mesh_path + "' and " + owner + "actor_skin_path = '" +
+                     actor_skin_path + "': must be given together (--actor-mesh and --actor-skin: a rigged actor "
+                     "needs both)");
   if (!actor_mesh_path.empty() && !actor_sequence_dir.empty())
-    throw UsageError("--actor-mesh and --actor-sequence are alternatives; give one");
+    throw UsageError(owner + "actor_mesh_path = '" + actor_mesh_path + "' and " + owner + "actor_sequence_dir = '" +
+                     actor_sequence_dir + "': must not both be given (--actor-mesh and --actor-sequence are "
+                     "alternatives)");
   motion.Check();
   rig.Check();
   scene.Check();
   shadow.Check();
-  if (sequence_up_axis != 'y' && sequence_up_axis != 'z') throw UsageError("--up: must be y or z");
-  if (!(noise_sigma >= 0.0 && noise_sigma <= 50.0)) throw UsageError("--noise: must be within [0, 50] grey levels");
-  if (!(gain_spread >= 0.0 && gain_spread < 0.5)) throw UsageError("gain spread: must be within [0, 0.5)");
-  if (threads < 1 || threads > 64) throw UsageError("threads: must be within [1, 64]");
+  if (sequence_up_axis != 'y' && sequence_up_axis != 'z')
+    throw UsageError(owner + "sequence_up_axis = '" + sequence_up_axis + "': must be 'y' or 'z' (--up)");
+  RequireOption(noise_sigma >= 0.0 && noise_sigma <= 50.0, owner + "noise_sigma", noise_sigma,
+                "in [0, 50] grey levels (--noise)");
+  RequireOption(gain_spread >= 0.0 && gain_spread < 0.5, owner + "gain_spread", gain_spread, "in [0, 0.5)");
+  RequireOption(threads >= 1 && threads <= 64, owner + "threads", threads, "in [1, 64]");
 }
 
 std::string DefaultGroundTruthDir(const std::string& capture_dir) {

@@ -16,7 +16,8 @@ using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
 void PoseFromJointsOptions::Check() const {
-  if (!(rotation_weight_m >= 0) || max_iterations < 1) throw UsageError("pose from joints: bad options");
+  RequireOption(rotation_weight_m >= 0, "PoseFromJointsOptions.rotation_weight_m", rotation_weight_m, ">= 0");
+  RequireOption(max_iterations >= 1, "PoseFromJointsOptions.max_iterations", max_iterations, ">= 1");
 }
 
 namespace {

@@ -28,16 +28,23 @@ using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
 void ScanRegistrationOptions::Check() const {
-  if (num_scan_samples < 100 || num_scan_residuals < 50) throw UsageError("registration: too few scan samples");
-  if (rounds < 1 || max_iterations < 1) throw UsageError("registration: rounds and max_iterations must be >= 1");
-  if (!(min_pair_distance_m > 0) || !(max_pair_distance_m >= min_pair_distance_m))
-    throw UsageError("registration: pair distances must be positive, max >= min");
-  if (!(max_normal_angle_deg > 0 && max_normal_angle_deg <= 180)) throw UsageError("registration: max_normal_angle_deg in (0, 180]");
-  if (!(loss_scale_m > 0) || !(prior_weight >= 0) || !(shape_prior_weight >= 0))
-    throw UsageError("registration: loss scale must be positive and weights non-negative");
-  if (!(max_residual_fraction > 0) || !(reference_pose_tolerance_deg > 0))
-    throw UsageError("registration: max_residual_fraction and reference_pose_tolerance_deg must be positive");
-  if (num_threads < 1) throw UsageError("registration: num_threads must be >= 1");
+  const std::string owner = "ScanRegistrationOptions.";
+  RequireOption(num_scan_samples >= 100, owner + "num_scan_samples", num_scan_samples, ">= 100");
+  RequireOption(num_scan_residuals >= 50, owner + "num_scan_residuals", num_scan_residuals, ">= 50");
+  RequireOption(rounds >= 1, owner + "rounds", rounds, ">= 1");
+  RequireOption(max_iterations >= 1, owner + "max_iterations", max_iterations, ">= 1");
+  RequireOption(min_pair_distance_m > 0, owner + "min_pair_distance_m", min_pair_distance_m, "> 0");
+  RequireOptions(max_pair_distance_m >= min_pair_distance_m, owner + "min_pair_distance_m", min_pair_distance_m,
+                 owner + "max_pair_distance_m", max_pair_distance_m, "min_pair_distance_m <= max_pair_distance_m");
+  RequireOption(max_normal_angle_deg > 0 && max_normal_angle_deg <= 180, owner + "max_normal_angle_deg",
+                max_normal_angle_deg, "in (0, 180]");
+  RequireOption(loss_scale_m > 0, owner + "loss_scale_m", loss_scale_m, "> 0");
+  RequireOption(prior_weight >= 0, owner + "prior_weight", prior_weight, ">= 0");
+  RequireOption(shape_prior_weight >= 0, owner + "shape_prior_weight", shape_prior_weight, ">= 0");
+  RequireOption(max_residual_fraction > 0, owner + "max_residual_fraction", max_residual_fraction, "> 0");
+  RequireOption(reference_pose_tolerance_deg > 0, owner + "reference_pose_tolerance_deg", reference_pose_tolerance_deg,
+                "> 0");
+  RequireOption(num_threads >= 1, owner + "num_threads", num_threads, ">= 1");
 }
 
 namespace {

@@ -23,15 +23,18 @@ using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
 void SilhouetteFitOptions::Check() const {
-  if (downscale < 0 || downscale > 16) throw UsageError("tracking: downscale must be in [0, 16]");
-  if (max_contour_points < 0) throw UsageError("tracking: max_contour_points must be >= 0");
-  if (rounds < 1 || max_iterations < 1) throw UsageError("tracking: rounds and max_iterations must be >= 1");
-  if (!(model_to_image_loss_px > 0) || !(image_to_model_loss_px > 0))
-    throw UsageError("tracking: loss scales must be positive");
-  if (!(image_to_model_weight >= 0) || !(prior_weight >= 0) || !(shape_prior_weight >= 0))
-    throw UsageError("tracking: weights must be non-negative");
-  if (!(skirt_prior_weight >= 0)) throw UsageError("tracking: skirt_prior_weight must be non-negative");
-  if (num_threads < 1) throw UsageError("tracking: num_threads must be >= 1");
+  const std::string owner = "SilhouetteFitOptions.";
+  RequireOption(downscale >= 0 && downscale <= 16, owner + "downscale", downscale, "in [0, 16]");
+  RequireOption(max_contour_points >= 0, owner + "max_contour_points", max_contour_points, ">= 0");
+  RequireOption(rounds >= 1, owner + "rounds", rounds, ">= 1");
+  RequireOption(max_iterations >= 1, owner + "max_iterations", max_iterations, ">= 1");
+  RequireOption(model_to_image_loss_px > 0, owner + "model_to_image_loss_px", model_to_image_loss_px, "> 0");
+  RequireOption(image_to_model_loss_px > 0, owner + "image_to_model_loss_px", image_to_model_loss_px, "> 0");
+  RequireOption(image_to_model_weight >= 0, owner + "image_to_model_weight", image_to_model_weight, ">= 0");
+  RequireOption(prior_weight >= 0, owner + "prior_weight", prior_weight, ">= 0");
+  RequireOption(shape_prior_weight >= 0, owner + "shape_prior_weight", shape_prior_weight, ">= 0");
+  RequireOption(skirt_prior_weight >= 0, owner + "skirt_prior_weight", skirt_prior_weight, ">= 0");
+  RequireOption(num_threads >= 1, owner + "num_threads", num_threads, ">= 1");
 }
 
 // One camera prepared for fitting.

@@ -64,9 +64,10 @@ void PlaceMotionAtReference(const BodyTemplate& body, const BodyShape& shape, co
 
 void TemplateBvhMotionOptions::Check() const {
   retarget.Check();
-  if (!(fps > 0) || !std::isfinite(fps)) throw UsageError("--fps: must be positive");
-  if (!(speed > 0) || !std::isfinite(speed)) throw UsageError("--speed: must be positive");
-  if (max_frames < 1) throw UsageError("--frames: must be at least 1");
+  const std::string owner = "TemplateBvhMotionOptions.";
+  RequireOption(fps > 0 && std::isfinite(fps), owner + "fps", fps, "> 0 and finite (--fps)");
+  RequireOption(speed > 0 && std::isfinite(speed), owner + "speed", speed, "> 0 and finite (--speed)");
+  RequireOption(max_frames >= 1, owner + "max_frames", max_frames, ">= 1 (--frames)");
 }
 
 std::vector<Pose> TemplateMotionFromBvh(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& reference,

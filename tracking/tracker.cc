@@ -108,14 +108,18 @@ HullPlacement EstimatePlacementFromHull(const Rig& rig, const std::vector<Image>
 
 void TrackerOptions::Check() const {
   fit.Check();
-  if (init_rounds < 1) throw UsageError("tracking: init_rounds must be >= 1");
-  if (!(skirt_min_iou_gain >= 0 && skirt_min_iou_gain < 1)) throw UsageError("tracking: skirt_min_iou_gain must be in [0, 1)");
-  if (!(skirt_try_below_iou >= 0 && skirt_try_below_iou <= 1))
-    throw UsageError("tracking: skirt_try_below_iou must be in [0, 1]");
-  if (!(velocity_damping >= 0 && velocity_damping <= 1.5)) throw UsageError("tracking: velocity_damping must be in [0, 1.5]");
-  if (!(bad_frame_iou >= 0 && bad_frame_iou <= 1)) throw UsageError("tracking: bad_frame_iou must be in [0, 1]");
-  if (!(empty_mask_fraction >= 0 && empty_mask_fraction < 1)) throw UsageError("tracking: empty_mask_fraction must be in [0, 1)");
-  if (iou_downscale < 0) throw UsageError("tracking: iou_downscale must be >= 0");
+  const std::string owner = "TrackerOptions.";
+  RequireOption(init_rounds >= 1, owner + "init_rounds", init_rounds, ">= 1");
+  RequireOption(skirt_min_iou_gain >= 0 && skirt_min_iou_gain < 1, owner + "skirt_min_iou_gain", skirt_min_iou_gain,
+                "in [0, 1)");
+  RequireOption(skirt_try_below_iou >= 0 && skirt_try_below_iou <= 1, owner + "skirt_try_below_iou",
+                skirt_try_below_iou, "in [0, 1]");
+  RequireOption(velocity_damping >= 0 && velocity_damping <= 1.5, owner + "velocity_damping", velocity_damping,
+                "in [0, 1.5]");
+  RequireOption(bad_frame_iou >= 0 && bad_frame_iou <= 1, owner + "bad_frame_iou", bad_frame_iou, "in [0, 1]");
+  RequireOption(empty_mask_fraction >= 0 && empty_mask_fraction < 1, owner + "empty_mask_fraction",
+                empty_mask_fraction, "in [0, 1)");
+  RequireOption(iou_downscale >= 0, owner + "iou_downscale", iou_downscale, ">= 0");
 }
 
 Tracker::Tracker(const Rig& rig, const std::vector<bool>& excluded, const TrackerOptions& options)

@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "deform/confluent_motion.h"
+#include "deform/correspondence_placement.h"
 #include "deform/correspondences.h"
 #include "deform/laplacian.h"
 #include "tests/support/test_support.h"
@@ -27,6 +28,9 @@ TEST(DeformOptions, CheckNamesTheFieldAndTheValue) {
   AugmentOptions augment;
   augment.max_radius_factor = 0.5;
   testing::ExpectCheckRefuses(augment, "AugmentOptions.max_radius_factor = 0.5: must be > 1");
+  CorrespondencePlacementOptions placement;
+  placement.limb_ring_markers = 2;
+  testing::ExpectCheckRefuses(placement, "CorrespondencePlacementOptions.limb_ring_markers = 2: must be >= 3");
 }
 
 }  // namespace

@@ -1,0 +1,33 @@
+// The tracking options refuse invalid values with a UsageError that names the field and the value.
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "tracking/scan_registration.h"
+#include "tracking/tracker.h"
+#include "tests/support/test_support.h"
+
+namespace confluent {
+namespace {
+
+TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
+  EXPECT_NO_THROW(TrackerOptions().Check());
+  EXPECT_NO_THROW(ScanRegistrationOptions().Check());
+  TrackerOptions tracker;
+  tracker.init_rounds = 0;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.init_rounds = 0: must be >= 1");
+  tracker = TrackerOptions();
+  tracker.velocity_damping = 2.0;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.velocity_damping = 2: must be in [0, 1.5]");
+  tracker = TrackerOptions();
+  tracker.fit.downscale = 17;
+  testing::ExpectCheckRefuses(tracker, "SilhouetteFitOptions.downscale = 17: must be in [0, 16]");
+  ScanRegistrationOptions registration;
+  registration.min_pair_distance_m = 0.2;
+  registration.max_pair_distance_m = 0.1;
+  testing::ExpectCheckRefuses(registration,
+                              "ScanRegistrationOptions.min_pair_distance_m = 0.2 and "
+                              "ScanRegistrationOptions.max_pair_distance_m = 0.1: must be");
+}
+
+}  // namespace
+}  // namespace confluent
