@@ -4,6 +4,10 @@
 #include <filesystem>
 
 #include "app/commands.h"
+#include "app/run_output.h"
+#include "pipeline/evaluation.h"
+#include "pipeline/finished_run.h"
+#include "pipeline/run_capture.h"
 #include "pipeline/run_folder.h"
 #include "calib/capture.h"
 #include "calib/rig_check.h"
@@ -53,29 +57,34 @@ int RunDemo(const ParsedArgs& args, const Context& context) {
     if (name.rfind("holdout", 0) == 0) heldout.push_back(name);
   if (heldout.empty()) throw InputError(capture_dir.string(), "the capture has no holdout<N> cameras to evaluate on");
   const fs::path run_dir = out / "run";
-  std::vector<std::string> run_args = {capture_dir.string(), "--out", run_dir.string()};
-  for (const std::string& name : heldout) run_args.insert(run_args.end(), {"--exclude-camera", name});
-  std::printf("[3/4] confluent run");
-  for (const std::string& arg : run_args) std::printf(" %s", arg.c_str());
-  std::printf("\n");
+  RunOptions run;
+  run.capture = capture_dir.string();
+  run.out = run_dir.string();
+  run.held_out = heldout;
+  run.version = CONFLUENT_VERSION;
+  run.command_line = {{"out", {run.out}}, {"exclude-camera", heldout}};
+  std::string held_out_args;
+  for (const std::string& name : heldout) held_out_args += " --exclude-camera " + name;
+  std::printf("[3/4] confluent run %s --out %s%s\n", run.capture.c_str(), run.out.c_str(), held_out_args.c_str());
   std::fflush(stdout);
-  const CommandSpec run = MakeRunCommand();
-  if (int status = run.run(ParseArgs(run, run_args), context); status != 0) return status;
+  RunCapture(run, context.make_progress, PrintStageReport, PrintRunLine);
 
   // 4. Held-out evaluation against the ground truth.
   // Every 4th frame keeps the demo short (on the default capture, scoring every 5th frame gave the
   // same mean IoU as every frame, to 0.001); `confluent evaluate` without --every scores them all.
-  const int every = args.get_int("evaluate-every", 4);
-  std::vector<std::string> evaluate_args = {capture_dir.string(), "--run", run_dir.string(), "--masks",
-                                            (truth_dir / "masks").string(), "--gt-meshes", (truth_dir / "meshes").string(),
-                                            "--every", std::to_string(every)};
-  for (const std::string& name : heldout) evaluate_args.insert(evaluate_args.end(), {"--heldout", name});
-  std::printf("[4/4] confluent evaluate");
-  for (const std::string& arg : evaluate_args) std::printf(" %s", arg.c_str());
-  std::printf("\n");
+  EvaluationOptions evaluation;
+  evaluation.held_out = heldout;
+  evaluation.masks_dir = (truth_dir / "masks").string();
+  evaluation.gt_meshes_dir = (truth_dir / "meshes").string();
+  evaluation.every = args.get_int("evaluate-every", 4);
+  if (evaluation.every < 1) throw UsageError("--evaluate-every: must be >= 1");
+  std::printf("[4/4] confluent evaluate --run %s --masks %s --gt-meshes %s --every %d\n", run.out.c_str(),
+              evaluation.masks_dir.c_str(), evaluation.gt_meshes_dir.c_str(), evaluation.every);
   std::fflush(stdout);
-  const CommandSpec evaluate = MakeEvaluateCommand();
-  if (int status = evaluate.run(ParseArgs(evaluate, evaluate_args), context); status != 0) return status;
+  const FinishedRun finished = OpenFinishedRun(run.out, "");
+  const EvaluationSummary summary = EvaluateRun(finished, capture, FrameRange{0, capture.num_frames()}, evaluation,
+                                                context.make_progress ? context.make_progress() : ProgressCallback());
+  PrintEvaluation(summary, finished.folder);
 
   TimingLog timings((run_dir / "timings.csv").string());
   std::printf("\ntime per stage (s): synth %.0f (when made), silhouettes %.1f, tracking %.1f, correspondences %.1f, "

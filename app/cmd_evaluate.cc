@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "app/commands.h"
+#include "app/run_output.h"
 #include "app/texture_args.h"
 #include "core/error.h"
 #include "pipeline/evaluation.h"
@@ -38,12 +39,7 @@ int RunEvaluate(const ParsedArgs& args, const Context& context) {
   options.texturing = TextureOptionsFromArgs(args);
 
   const EvaluationSummary summary = EvaluateRun(finished, capture, range, options, context.make_progress());
-  const RunFolder& run = finished.folder;
-  std::printf("%s", SummaryTable(summary).c_str());
-  for (const std::string& warning : summary.warnings)
-    std::fprintf(stderr, "confluent evaluate: warning: %s\n", warning.c_str());
-  std::printf("metrics: %s, plots: %s, report: %s\n", run.Path("metrics.json").c_str(), run.Path("plots").c_str(),
-              run.Path("report.html").c_str());
+  PrintEvaluation(summary, finished.folder);
   return 0;
 }
 

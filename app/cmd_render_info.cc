@@ -6,6 +6,7 @@
 #include "app/commands.h"
 #include "core/error.h"
 #include "render/renderer.h"
+#include "render/self_test.h"
 
 namespace confluent::app {
 namespace {
@@ -35,30 +36,9 @@ int RunRenderInfo(const ParsedArgs& args, const Context&) {
   std::printf("GL version    %s\n", info.gl_version.c_str());
   std::printf("GLSL version  %s\n", info.glsl_version.c_str());
 
-  // Self-test: a square 1 m in front of a 64x48 camera must cover its known pixel rectangle.
-  Mesh square;
-  square.vertices.resize(4, 3);
-  square.vertices << -0.25, -0.25, 1.0, 0.25, -0.25, 1.0, 0.25, 0.25, 1.0, -0.25, 0.25, 1.0;
-  square.faces.resize(2, 3);
-  square.faces << 0, 1, 2, 0, 2, 3;
-  renderer.AddMesh(square, "self-test square");
-  Camera camera;
-  camera.name = "self-test";
-  camera.width = 64;
-  camera.height = 48;
-  camera.K << 40.0, 0.0, 31.5, 0.0, 40.0, 23.5, 0.0, 0.0, 1.0;
-  RenderRequest request;
-  request.color = false;
-  request.silhouette = true;
-  const RenderResult result = renderer.Render(camera, request);
-  // The square spans pixels 31.5 +- 10 -> columns 22..41 (20 px), rows 14..33 (20 px).
-  int covered = 0;
-  for (int y = 0; y < camera.height; ++y)
-    for (int x = 0; x < camera.width; ++x) covered += result.silhouette.at<std::uint8_t>(x, y) == 255;
-  const bool ok = covered == 400 && result.silhouette.at<std::uint8_t>(22, 14) == 255 &&
-                  result.silhouette.at<std::uint8_t>(41, 33) == 255 && result.silhouette.at<std::uint8_t>(21, 14) == 0;
-  std::printf("self-test     %s (%d of 400 pixels)\n", ok ? "ok" : "FAILED", covered);
-  return ok ? 0 : 1;
+  const RenderSelfTest test = RunRenderSelfTest(renderer);
+  std::printf("self-test     %s (%d of %d pixels)\n", test.ok ? "ok" : "FAILED", test.covered_px, test.expected_px);
+  return test.ok ? 0 : 1;
 }
 
 }  // namespace

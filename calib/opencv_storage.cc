@@ -25,6 +25,22 @@ bool HasEntryWithoutName(const std::string& text) {
   return false;
 }
 
+// Whether some line starts with a document marker ("---" or "...") followed by more text on
+// the same line, which a YAML document marker may not be.
+bool HasMarkerWithText(const std::string& text) {
+  std::size_t line_start = 0;
+  while (line_start < text.size()) {
+    for (const char* marker : {"---", "..."})
+      if (text.compare(line_start, 3, marker) == 0 && line_start + 3 < text.size() &&
+          std::string(" \t\r\n").find(text[line_start + 3]) == std::string::npos)
+        return true;
+    const std::size_t end = text.find('\n', line_start);
+    if (end == std::string::npos) return false;
+    line_start = end + 1;
+  }
+  return false;
+}
+
 }  // namespace
 
 void OpenFileStorage(const std::string& path, const std::string& format_name, cv::FileStorage* storage) {
@@ -43,6 +59,10 @@ void OpenFileStorage(const std::string& path, const std::string& format_name, cv
   // inside a nested map; found by fuzzing). OpenCV never writes such an entry.
   if (first != std::string::npos && text[first] != '<' && text[first] != '{' && HasEntryWithoutName(text))
     throw InputError(path, "cannot parse " + format_name + ": an entry without a name (a line starting with ':')");
+  // It also loops for ever on some files whose "---" line goes on with text ("---n:a", then a
+  // line without a value and a list; found by fuzzing). OpenCV writes "---" alone on its line.
+  if (first != std::string::npos && text[first] != '<' && text[first] != '{' && HasMarkerWithText(text))
+    throw InputError(path, "cannot parse " + format_name + ": text after a '---' or '...' document marker on its line");
   try {
     storage->open(path, cv::FileStorage::READ);
   } catch (const cv::Exception& exception) {

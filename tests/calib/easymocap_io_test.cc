@@ -203,6 +203,19 @@ TEST(EasyMocapIoTest, EntryWithoutANameIsRefusedNotParsedForEver) {
   ExpectReadError(dir, {dir / "intri.yml", "entry without a name"});
 }
 
+// OpenCV's parser also loops for ever on this one (found by fuzz_easymocap); "---" with text
+// after it on its line is refused first, and a well-formed file with "---" alone still reads.
+TEST(EasyMocapIoTest, DocumentMarkerWithTextIsRefusedNotParsedForEver) {
+  TempDir dir;
+  WriteFile(dir / "intri.yml", "%YAML:1.0\n---n:a\nmse\n - x\n");
+  WriteFile(dir / "extri.yml", Extri(kIdentity));
+  ExpectReadError(dir, {dir / "intri.yml", "document marker"});
+  WriteEasyMocap(ExampleRig(), dir.path());
+  const std::string intri = ReadTextFile(dir / "intri.yml");
+  ASSERT_NE(intri.find("\n---\n"), std::string::npos) << "OpenCV writes the marker alone on its line";
+  EXPECT_EQ(ReadEasyMocap(dir / "intri.yml", dir / "extri.yml").size(), ExampleRig().size());
+}
+
 TEST(EasyMocapIoTest, UnwritableNameIsAnOutputError) {
   TempDir dir;
   Rig rig = ExampleRig();
