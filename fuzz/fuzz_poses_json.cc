@@ -1,6 +1,6 @@
 // libFuzzer target: tracking/motion_io.h ReadPosesJson, which reads both a run's poses.json and
-// the tracker's resumable one-frame state files (tracking/state/<frame>.json, read by
-// app/run_stages_capture.cc). Camera names are given, as when resuming, so the per-camera
+// the tracker's resumable one-frame state files (tracking/<frame>.json, read by
+// pipeline/run_stages_capture.cc). Camera names are given, as when resuming, so the per-camera
 // overlaps are parsed too.
 #include "fuzz/fuzz_util.h"
 #include "tracking/motion_io.h"
