@@ -1,5 +1,11 @@
 #include "calib/opencv_storage.h"
 
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <csignal>
 #include <exception>
 
 #include <opencv2/core.hpp>
@@ -41,6 +47,30 @@ bool HasMarkerWithText(const std::string& text) {
   return false;
 }
 
+// OpenCV 4.6's parsers loop for ever, or crash, on some malformed files; fuzzing keeps finding
+// new ones. So a file is first parsed in a child process with `seconds` to finish, and only a
+// file the child parsed without hanging or crashing is parsed here.
+enum class TrialParse { kFinished, kHung, kCrashed, kNotChecked };
+
+TrialParse ParseInChild(const std::string& path, unsigned seconds) {
+  const pid_t child = fork();
+  if (child < 0) return TrialParse::kNotChecked;
+  if (child == 0) {
+    std::signal(SIGALRM, SIG_DFL);  // a fuzzer's or test runner's handler must not catch it
+    alarm(seconds);
+    try {
+      cv::FileStorage storage(path, cv::FileStorage::READ);
+    } catch (...) {
+    }
+    _exit(0);  // no exit handlers: the parent owns them
+  }
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0)
+    if (errno != EINTR) return TrialParse::kNotChecked;
+  if (WIFSIGNALED(status)) return WTERMSIG(status) == SIGALRM ? TrialParse::kHung : TrialParse::kCrashed;
+  return WEXITSTATUS(status) == 0 ? TrialParse::kFinished : TrialParse::kCrashed;
+}
+
 }  // namespace
 
 void OpenFileStorage(const std::string& path, const std::string& format_name, cv::FileStorage* storage) {
@@ -63,6 +93,13 @@ void OpenFileStorage(const std::string& path, const std::string& format_name, cv
   // line without a value and a list; found by fuzzing). OpenCV writes "---" alone on its line.
   if (first != std::string::npos && text[first] != '<' && text[first] != '{' && HasMarkerWithText(text))
     throw InputError(path, "cannot parse " + format_name + ": text after a '---' or '...' document marker on its line");
+  constexpr unsigned kParseSeconds = 5;
+  const TrialParse trial = ParseInChild(path, kParseSeconds);
+  if (trial == TrialParse::kHung)
+    throw InputError(path, "cannot parse " + format_name + ": OpenCV's parser did not finish within " +
+                               std::to_string(kParseSeconds) + " s (malformed file?)");
+  if (trial == TrialParse::kCrashed)
+    throw InputError(path, "cannot parse " + format_name + ": OpenCV's parser crashed on it (malformed file?)");
   try {
     storage->open(path, cv::FileStorage::READ);
   } catch (const cv::Exception& exception) {

@@ -216,6 +216,17 @@ TEST(EasyMocapIoTest, DocumentMarkerWithTextIsRefusedNotParsedForEver) {
   EXPECT_EQ(ReadEasyMocap(dir / "intri.yml", dir / "extri.yml").size(), ExampleRig().size());
 }
 
+// A file on which OpenCV's parser loops for ever with none of the patterns above (found by
+// fuzz_easymocap) is refused after the child process that tries it first runs out of time.
+TEST(EasyMocapIoTest, FileTheParserNeverFinishesIsRefusedInTime) {
+  TempDir dir;
+  WriteFile(dir / "intri.yml",
+            "%YAML:1.s: \xb3\n   dt: d\n ncv-matrix\n   rows: 5\n   cols: 3\n   dt: d\n   data:4s: 5\n"
+            "   cols: 3\n   dt: d\n   data:40\n");
+  WriteFile(dir / "extri.yml", Extri(kIdentity));
+  ExpectReadError(dir, {dir / "intri.yml", "did not finish"});
+}
+
 TEST(EasyMocapIoTest, UnwritableNameIsAnOutputError) {
   TempDir dir;
   Rig rig = ExampleRig();
