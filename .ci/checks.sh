@@ -14,6 +14,6 @@ step() {
 # in `./dev test --sanitize` by hand.
 heavy='^(SambaRealMotion|SilhouetteFit|SkirtFit|ScanRegistration|Calibrate|RealSilhouettes|RealCheckerboard|CorrespondencePlacement|TemplateMotion|TrackCommand)\.'
 step ./dev test --sanitize -L unit -E "$heavy"
-step ./dev fuzz --seconds 30
+step ./dev fuzz --seconds 30 --seed 1
 step ./dev demo --preset tiny --out /tmp/confluent-ci-demo
 step ./dev test

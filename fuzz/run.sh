@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Runs the libFuzzer targets of a sanitizer build (normally through `./dev fuzz`).
 #
-#   bash fuzz/run.sh --build DIR [TARGET] [--seconds N] [--jobs J]
+#   bash fuzz/run.sh --build DIR [TARGET] [--seconds N] [--jobs J] [--seed S]
 #
 # Each target fuzzes for N seconds (default 60), J targets at a time (default 2), starting from
 # its committed seed corpus fuzz/corpus/<target>/ plus a working corpus that grows in
 # DIR/fuzz/work/<target>/ (never in the repository). Logs go to DIR/fuzz/logs/<target>.log;
 # a crash, hang (> 10 s) or out-of-memory (> 2 GB) input is written to DIR/fuzz/artifacts/.
+# --seed S fixes libFuzzer's random seed, so that a run from the committed corpora tries the same
+# inputs on every machine (CI's smoke run); without it every run explores afresh.
 # Prints per target the executions and whether it found anything; exits non-zero when any
 # target found something, naming the input file. Reproduce with: DIR/fuzz/fuzz_<target> FILE
 set -uo pipefail
@@ -15,12 +17,14 @@ build=""
 target=""
 seconds=60
 jobs=2
+seed=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) build="$2"; shift 2 ;;
     --seconds) seconds="$2"; shift 2 ;;
     --jobs) jobs="$2"; shift 2 ;;
-    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
+    --seed) seed="$2"; shift 2 ;;
+    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
     -*) echo "fuzz/run.sh: unknown option $1" >&2; exit 2 ;;
     *) target="$1"; shift ;;
   esac
@@ -35,6 +39,7 @@ if [ ! -f "$list" ]; then
   exit 2
 fi
 case "$seconds" in ''|*[!0-9]*) echo "fuzz/run.sh: --seconds needs a whole number" >&2; exit 2 ;; esac
+case "$seed" in *[!0-9]*) echo "fuzz/run.sh: --seed needs a whole number" >&2; exit 2 ;; esac
 
 names=()
 declare -A max_len corpus
@@ -71,7 +76,7 @@ fuzz_one() {
   mkdir -p "$work"
   "$build/fuzz/fuzz_$name" "$work" "${corpus[$name]}" \
     -max_total_time="$seconds" -max_len="${max_len[$name]}" -timeout=10 -rss_limit_mb=2048 \
-    -artifact_prefix="$artifacts/$name-" -print_final_stats=1 >"$logs/$name.log" 2>&1
+    -artifact_prefix="$artifacts/$name-" -print_final_stats=1 ${seed:+-seed="$seed"} >"$logs/$name.log" 2>&1
   echo $? >"$logs/$name.rc"
 }
 
