@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -118,6 +119,13 @@ std::unique_ptr<OIIO::ImageInput> OpenInput(const std::string& path) {
   return input;
 }
 
+// A byte count for messages, whole; `bytes` may exceed every integer type (a corrupt header).
+std::string FormatBytes(double bytes) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.0f", bytes);
+  return text;
+}
+
 }  // namespace
 
 Image ReadImage(const std::string& path, std::size_t max_pixel_bytes) {
@@ -138,7 +146,7 @@ Image ReadImage(const std::string& path, std::size_t max_pixel_bytes) {
   const double bytes = pixels * std::max<double>(BytesPerChannel(type), static_cast<double>(spec.format.size()));
   if (bytes > static_cast<double>(max_pixel_bytes))
     throw InputError(path, "image too large: " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " with " +
-                               std::to_string(spec.nchannels) + " channels needs " + std::to_string(static_cast<long long>(bytes)) +
+                               std::to_string(spec.nchannels) + " channels needs " + FormatBytes(bytes) +
                                " bytes, more than the limit of " + std::to_string(max_pixel_bytes) +
                                " (corrupt header?)");
   Image image(spec.width, spec.height, spec.nchannels, type);
