@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -13,13 +12,10 @@
 #include "core/error.h"
 #include "core/mesh_io.h"
 #include "pipeline/animation.h"
+#include "pipeline/run_folder.h"
 
 namespace confluent::app {
 namespace {
-
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 void Print(const AnimationLog& log) {
   for (const std::string& line : log.info) std::printf("%s\n", line.c_str());
@@ -56,10 +52,10 @@ int RunAnimate(const ParsedArgs& args, const Context& context) {
   const double fps = args.get_double("fps", kAssumedFrameRate);
   if (!(fps > 0.0 && fps <= 1000.0)) throw UsageError("--fps: must be within (0, 1000]");
 
-  const double start = Now();
+  const double start = NowSeconds();
   const Mesh scan = ReadMesh(scan_path);
   std::printf("scan %s: %d vertices, %d faces (read in %.2f s)\n", scan_path.c_str(), scan.num_vertices(),
-              scan.num_faces(), Now() - start);
+              scan.num_faces(), NowSeconds() - start);
   std::filesystem::create_directories(out_dir);
   AnimationLog log;
   TemplateMotion source;

@@ -17,8 +17,6 @@
 namespace confluent {
 namespace {
 
-// ReadImage refuses images whose pixels would need more memory than this.
-
 OIIO::TypeDesc OiioType(PixelType type) {
   switch (type) {
     case PixelType::kUInt8: return OIIO::TypeDesc::UINT8;

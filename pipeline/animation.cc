@@ -1,7 +1,6 @@
 #include "pipeline/animation.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +13,8 @@
 #include "core/mesh_io.h"
 #include "core/video_writer.h"
 #include "deform/point_cache.h"
+#include "pipeline/frame_range.h"
+#include "pipeline/run_folder.h"
 #include "pipeline/scan_correspondence.h"
 #include "render/camera_path.h"
 #include "render/renderer.h"
@@ -22,10 +23,6 @@
 
 namespace confluent {
 namespace {
-
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 std::string Lower(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -47,11 +44,7 @@ std::vector<std::string> SequenceFiles(const std::string& dir) {
   return files;
 }
 
-std::string FrameName(int frame, const std::string& extension) {
-  char name[32];
-  std::snprintf(name, sizeof(name), "%06d.%s", frame, extension.c_str());
-  return name;
-}
+std::string FrameName(int frame, const std::string& extension) { return FrameStem(frame) + "." + extension; }
 
 // The orbit for --render orbit: one turn over the sequence around the moving template (the
 // look-at point follows the centre of the template's box, smoothed over half a second), far
@@ -145,7 +138,7 @@ TemplateMotion BvhMotionOfTemplate(const BvhMotionSourceOptions& source_options,
   auto body = std::make_shared<BodyTemplate>();
   ScanRegistration registration;
   TemplateMotion motion;
-  double start = Now();
+  double start = NowSeconds();
   if (correspondences_path.empty()) {
     // Automatic: register the template to the scan, place the pairs, keep both for re-runs.
     const ScanCorrespondence result = CorrespondTemplateToScan(*body, scan, scan_path, ScanCorrespondenceOptions());
@@ -157,7 +150,7 @@ TemplateMotion BvhMotionOfTemplate(const BvhMotionSourceOptions& source_options,
                   "template registered to the scan: rms residual %.4g (scan units, %.3g m per unit), %zu correspondences "
                   "placed automatically (%.2f s)",
                   registration.rms_residual_m, registration.metres_per_unit, motion.correspondences.pairs.size(),
-                  Now() - start);
+                  NowSeconds() - start);
     log->info.push_back(line);
     for (const std::string& warning : registration.warnings) log->warnings.push_back(scan_path + ": " + warning);
     const std::string written = out_dir + "/correspondences.json";
@@ -170,13 +163,13 @@ TemplateMotion BvhMotionOfTemplate(const BvhMotionSourceOptions& source_options,
     motion.reference = body->PosedMesh(registration.shape, registration.pose);
     char line[512];
     std::snprintf(line, sizeof line, "template registration from %s: %zu pairs (%.2f s)", correspondences_path.c_str(),
-                  motion.correspondences.pairs.size(), Now() - start);
+                  motion.correspondences.pairs.size(), NowSeconds() - start);
     log->info.push_back(line);
   }
   ValidateCorrespondences(motion.correspondences, motion.reference.num_faces(), scan.num_faces(),
                           correspondences_path.empty() ? out_dir + "/correspondences.json" : correspondences_path);
 
-  start = Now();
+  start = NowSeconds();
   const TemplateBvhMotionOptions& options = source_options.motion;
   BvhRetargetResult retarget;
   auto poses = std::make_shared<std::vector<Pose>>(
@@ -188,7 +181,7 @@ TemplateMotion BvhMotionOfTemplate(const BvhMotionSourceOptions& source_options,
                 "%zu frames at %.1f fps (%.2f s)",
                 bvh_path.c_str(), retarget.fps, retarget.up_axis, retarget.unit.c_str(),
                 retarget.bvh_height * retarget.metres_per_unit, retarget.translation_scale, poses->size(), options.fps,
-                Now() - start);
+                NowSeconds() - start);
   log->info.push_back(line);
   std::string unmapped;
   for (const std::string& name : retarget.unmapped) unmapped += (unmapped.empty() ? "" : ", ") + name;
@@ -208,7 +201,7 @@ TemplateMotion BvhMotionOfTemplate(const BvhMotionSourceOptions& source_options,
 AnimationSummary AnimateScan(const Mesh& scan, const std::string& scan_path, const TemplateMotion& source,
                              const std::string& out_dir, const AnimationOptions& options,
                              const ProgressCallback& progress) {
-  const double run_start = Now();
+  const double run_start = NowSeconds();
   AnimationSummary result;
   AnimationLog* log = &result.log;
   const std::string& format = options.format;
@@ -252,20 +245,20 @@ AnimationSummary AnimateScan(const Mesh& scan, const std::string& scan_path, con
   double template_seconds = 0.0, deform_seconds = 0.0, write_seconds = 0.0, render_seconds = 0.0;
   Mesh output = scan;
   for (int i = 0; i < source.num_frames; ++i) {
-    double start = Now();
+    double start = NowSeconds();
     const RowMatrixX3d template_vertices = source.frame_vertices(i);
     if (template_vertices.rows() != source.reference.num_vertices())
       throw InputError(source.description, "frame " + std::to_string(i) + " has a different vertex count");
-    template_seconds += Now() - start;
+    template_seconds += NowSeconds() - start;
     DeformSummary summary;
-    start = Now();
+    start = NowSeconds();
     output.vertices = motion.Deform(template_vertices, &summary);
-    deform_seconds += Now() - start;
+    deform_seconds += NowSeconds() - start;
     singular_frames += summary.reference_frame >= 0;
     for (const std::string& warning : summary.warnings)
       if (warned.insert(warning.substr(0, 40)).second)
         log->warnings.push_back("frame " + std::to_string(i) + ": " + warning);
-    start = Now();
+    start = NowSeconds();
     WriteMesh(out_dir + "/" + FrameName(i, format), output);
     if (write_template) {
       Mesh posed = source.reference;
@@ -273,22 +266,22 @@ AnimationSummary AnimateScan(const Mesh& scan, const std::string& scan_path, con
       WriteMesh(out_dir + "/template/" + FrameName(i, "ply"), posed);
     }
     if (cache) cache->Append(output.vertices);
-    write_seconds += Now() - start;
+    write_seconds += NowSeconds() - start;
     if (renderer) {
-      start = Now();
+      start = NowSeconds();
       renderer->UpdateVertices(mesh_handle, output.vertices);
       const RenderResult result = renderer->Render(orbit[i], request);
       WriteImage(out_dir + "/orbit/" + FrameName(i, "png"), result.color);
       if (video) video->Write(result.color);
-      render_seconds += Now() - start;
+      render_seconds += NowSeconds() - start;
     }
     ReportProgress(progress, "animate", i + 1, source.num_frames, "frame " + std::to_string(i));
   }
   if (cache) cache->Finish();
   if (video) {
-    const double start = Now();
+    const double start = NowSeconds();
     video->Close();
-    render_seconds += Now() - start;
+    render_seconds += NowSeconds() - start;
   }
   const double n = source.num_frames;
   char line[512];
@@ -303,7 +296,7 @@ AnimationSummary AnimateScan(const Mesh& scan, const std::string& scan_path, con
   std::snprintf(line, sizeof line, "per frame: template %.2f ms, deform %.2f ms, write %.2f ms%s; total %.1f s",
                 1e3 * template_seconds / n, 1e3 * deform_seconds / n, 1e3 * write_seconds / n,
                 renderer ? (", render " + std::to_string(1e3 * render_seconds / n).substr(0, 7) + " ms").c_str() : "",
-                Now() - run_start);
+                NowSeconds() - run_start);
   log->info.push_back(line);
   log->info.push_back("wrote " + out_dir + "/" + FrameName(0, format) + " .. " + FrameName(source.num_frames - 1, format) +
                       (cache ? " and scan.pc2 + rest.ply" : ""));
