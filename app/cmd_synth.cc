@@ -52,6 +52,10 @@ int RunSynth(const ParsedArgs& args, const Context& context) {
   const std::string bvh_up = args.get("bvh-up", "auto");
   if (bvh_up != "auto" && bvh_up != "y" && bvh_up != "z") throw UsageError("--bvh-up: expected auto, y or z, got '" + bvh_up + "'");
   options.motion.bvh.up_axis = bvh_up == "auto" ? 'a' : bvh_up[0];
+  options.motion.bvh_start_s = args.get_double("bvh-start", 0.0);
+  options.motion.bvh_in_place = args.has("bvh-in-place");
+  if ((args.has("bvh-start") || args.has("bvh-in-place")) && options.motion.bvh_path.empty())
+    throw UsageError("--bvh-start and --bvh-in-place go with --bvh FILE");
   if (!options.motion.bvh_path.empty() && !options.actor_sequence_dir.empty())
     throw UsageError("--bvh drives a skinned actor; it cannot be combined with --actor-sequence");
   if (!options.motion.bvh_path.empty() && !args.has("frames")) options.motion.num_frames = 1 << 20;
@@ -110,7 +114,9 @@ CommandSpec MakeSynthCommand() {
                   {"up", "AXIS", "up axis of the actor sequence: z (default) or y"},
                   {"bvh", "FILE", "perform this BVH motion (retargeted to the actor) instead of the built-in one"},
                   {"bvh-map", "T=B,...", "BVH joint names for actor joints, e.g. left_shoulder=LeftArm"},
-                  {"bvh-up", "AXIS", "up axis of the BVH: auto (default), y or z"}};
+                  {"bvh-up", "AXIS", "up axis of the BVH: auto (default), y or z"},
+                  {"bvh-start", "S", "start the performance S seconds into the BVH (default 0)"},
+                  {"bvh-in-place", "", "perform a travelling BVH on the spot (its slow travel removed)"}};
   spec.run = RunSynth;
   return spec;
 }

@@ -1,6 +1,7 @@
 #include "core/bvh_io.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -103,6 +104,46 @@ std::string Num(double v) {
   return buffer;
 }
 
+// Some exporters (Bandai Namco's dataset, for one) put a motionless root above the hips and
+// carry the body's travel in the hips' own translation channels, which a Pose cannot hold for a
+// non-root joint. When the root does not move in any frame, has that one child, and the child's
+// translation channels are the only ones that leave their offsets, the child becomes the root:
+// its rotation is composed with the root's and its travel becomes the root translation, so
+// every joint's world transform is unchanged. Returns false (motion untouched) otherwise.
+bool CollapseStaticRoot(BvhMotion* motion, int child, const std::vector<Eigen::Vector3d>& child_translation) {
+  Skeleton& skeleton = motion->skeleton;
+  if (child != 1 || skeleton.joints[child].parent != 0 || motion->frames.empty() ||
+      child_translation.size() != motion->frames.size())
+    return false;
+  for (int j = 1; j < skeleton.size(); ++j)
+    if (j != child && skeleton.joints[j].parent == 0) return false;
+  const Pose& first = motion->frames[0];
+  for (const Pose& frame : motion->frames)
+    if (frame.local_rotations[0].angularDistance(first.local_rotations[0]) > 1e-9 ||
+        (frame.root_translation - first.root_translation).norm() > 1e-9)
+      return false;
+  const Eigen::Matrix3d root_rotation = first.local_rotations[0].toRotationMatrix();
+  const Eigen::Vector3d root_position = skeleton.joints[0].offset_in_parent + first.root_translation;
+  const Eigen::Vector3d rest_position = root_position + root_rotation * skeleton.joints[child].offset_in_parent;
+  for (std::size_t f = 0; f < motion->frames.size(); ++f) {
+    Pose& frame = motion->frames[f];
+    const Eigen::Vector3d position = root_position + root_rotation * child_translation[f];
+    frame.local_rotations[child] = Eigen::Quaterniond(root_rotation * frame.local_rotations[child]).normalized();
+    frame.local_rotations.erase(frame.local_rotations.begin());
+    frame.root_translation = position - rest_position;
+  }
+  Skeleton collapsed;
+  for (int j = 1; j < skeleton.size(); ++j) {
+    Joint joint = skeleton.joints[j];
+    joint.parent = j == child ? -1 : joint.parent - 1;
+    if (j == child) joint.offset_in_parent = rest_position;
+    collapsed.joints.push_back(joint);
+  }
+  skeleton = collapsed;
+  motion->channels.erase(motion->channels.begin());
+  return true;
+}
+
 }  // namespace
 
 BvhMotion ReadBvh(const std::string& path, const BvhReadOptions& options) {
@@ -190,7 +231,9 @@ BvhMotion ReadBvh(const std::string& path, const BvhReadOptions& options) {
   }
   motion.skeleton = skeleton;
 
-  bool warned_translation = false;
+  // Translations of the root's child joints per frame, for CollapseStaticRoot.
+  std::vector<std::vector<Eigen::Vector3d>> child_translations(skeleton.size());
+  std::vector<int> moved_joints;  // non-root joints whose translation channels leave their offset
   for (int f = 0; f < static_cast<int>(num_frames); ++f) {
     if (tokens.done()) tokens.Fail("the file ends after " + std::to_string(f) + " of " +
                                    std::to_string(static_cast<int>(num_frames)) + " frames (truncated)");
@@ -217,14 +260,18 @@ BvhMotion ReadBvh(const std::string& path, const BvhReadOptions& options) {
       pose.local_rotations[new_index[j]] = Eigen::Quaterniond(axes * rotation * axes.transpose()).normalized();
       if (has_translation) {
         const Eigen::Vector3d scaled = options.scale * (axes * translation);
-        if (j == 0) {
+        const int joint = new_index[j];
+        if (joint == 0) {
           pose.root_translation = scaled;
-        } else if (!warned_translation &&
-                   (scaled - skeleton.joints[new_index[j]].offset_in_parent).norm() >
-                       1e-3 * std::max(1.0, skeleton.joints[new_index[j]].offset_in_parent.norm())) {
-          motion.warnings.push_back("translation channels of non-root joints are ignored (first: joint " +
-                                    skeleton.joints[new_index[j]].name + ", frame " + std::to_string(f) + ")");
-          warned_translation = true;
+        } else {
+          if (skeleton.joints[joint].parent == 0) {
+            child_translations[joint].resize(static_cast<std::size_t>(num_frames), skeleton.joints[joint].offset_in_parent);
+            child_translations[joint][f] = scaled;
+          }
+          if ((scaled - skeleton.joints[joint].offset_in_parent).norm() >
+                  1e-3 * std::max(1.0, skeleton.joints[joint].offset_in_parent.norm()) &&
+              std::find(moved_joints.begin(), moved_joints.end(), joint) == moved_joints.end())
+            moved_joints.push_back(joint);
         }
       }
     }
@@ -233,6 +280,11 @@ BvhMotion ReadBvh(const std::string& path, const BvhReadOptions& options) {
     motion.frames.push_back(pose);
   }
   if (!tokens.done()) tokens.Fail("unexpected data after the last frame");
+  if (moved_joints.size() == 1 && CollapseStaticRoot(&motion, moved_joints[0], child_translations[moved_joints[0]]))
+    moved_joints.clear();
+  if (!moved_joints.empty())
+    motion.warnings.push_back("translation channels of non-root joints are ignored (first: joint " +
+                              skeleton.joints[moved_joints[0]].name + ")");
   return motion;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "core/body_model.h"
@@ -81,6 +82,34 @@ Matrix3d BestRotation(const std::vector<Vector3d>& from, const std::vector<Vecto
   return svd.matrixV() * d * svd.matrixU().transpose();
 }
 
+// World transforms of the BVH pose that defines its up axis, height and bone alignment: the rest
+// pose when the body stands in it (the trunk opposite both legs), else the first frame in which it
+// stands, else frame 0. Most files stand at rest (a T-pose); some exporters leave the rest pose
+// meaningless (Bandai Namco's: every bone along +x) and pose the body only through the frames.
+std::vector<Eigen::Isometry3d> ReferencePose(const BvhMotion& motion, int pelvis, int top, const int hips[2],
+                                             const int ankles[2], int* frame) {
+  auto stands = [&](const std::vector<Eigen::Isometry3d>& world) {
+    const Vector3d trunk = world[top].translation() - world[pelvis].translation();
+    for (int side = 0; side < 2; ++side) {
+      const Vector3d leg = world[ankles[side]].translation() - world[hips[side]].translation();
+      if (trunk.norm() <= 0 || leg.norm() <= 0 || trunk.normalized().dot(leg.normalized()) > -0.8) return false;
+    }
+    return true;
+  };
+  *frame = -1;
+  std::vector<Eigen::Isometry3d> world = WorldFromJoint(motion.skeleton, Pose::Rest(motion.skeleton.size()));
+  if (stands(world)) return world;
+  for (std::size_t f = 0; f < motion.frames.size(); ++f) {
+    world = WorldFromJoint(motion.skeleton, motion.frames[f]);
+    if (stands(world)) {
+      *frame = static_cast<int>(f);
+      return world;
+    }
+  }
+  *frame = 0;
+  return WorldFromJoint(motion.skeleton, motion.frames[0]);
+}
+
 struct UnitGuess {
   const char* name;
   double metres;
@@ -93,7 +122,8 @@ void BvhRetargetOptions::Check() const {
     throw UsageError(std::string("BvhRetargetOptions.up_axis = '") + up_axis + "': must be 'a' (auto), 'y' or 'z'");
 }
 
-std::map<std::string, std::string> GuessBvhJointMap(const Skeleton& bvh, const std::vector<std::string>& target_names) {
+std::map<std::string, std::string> GuessBvhJointMap(const Skeleton& bvh, const std::vector<std::string>& target_names,
+                                                    const std::vector<Vector3d>& joint_positions) {
   std::map<std::string, int> by_name;  // normalized BVH name -> first joint
   for (int j = 0; j < bvh.size(); ++j) by_name.emplace(Normalize(bvh.joints[j].name), j);
   auto has_target = [&](const std::string& name) {
@@ -125,6 +155,26 @@ std::map<std::string, std::string> GuessBvhJointMap(const Skeleton& bvh, const s
       }
     }
   }
+  // No head joint, but a neck chain of two (CMU's ASF export: LowerNeck -> Neck): the upper one
+  // turns the head.
+  if (!map.count("head") && map.count("neck") && has_target("head")) {
+    const int neck = bvh.IndexOf(map["neck"]), parent = bvh.joints[neck].parent;
+    if (parent >= 0 && Normalize(bvh.joints[parent].name).find("neck") != std::string::npos) {
+      map["head"] = map["neck"];
+      map["neck"] = bvh.joints[parent].name;
+    }
+  }
+  // End joints without a name of their own ("Hand_L_end"): the only child of the mapped joint
+  // when it is an End Site (ReadBvh names them "<joint>_end").
+  for (const auto& [end, joint] : {std::pair<const char*, const char*>{"head_end", "head"},
+                                   {"left_hand_end", "left_wrist"}, {"right_hand_end", "right_wrist"}}) {
+    if (map.count(end) || !map.count(joint) || !has_target(end)) continue;
+    const int j = bvh.IndexOf(map[joint]);
+    std::vector<int> kids;
+    for (int c = 0; c < bvh.size(); ++c)
+      if (bvh.joints[c].parent == j) kids.push_back(c);
+    if (kids.size() == 1 && bvh.joints[kids[0]].name == map[joint] + "_end") map[end] = bvh.joints[kids[0]].name;
+  }
   // Spine and chest: the joints of the pelvis-to-neck chain nearest the target's height fractions
   // (name conventions for the torso differ too much between rigs).
   const auto pelvis = map.find("pelvis");
@@ -137,7 +187,7 @@ std::map<std::string, std::string> GuessBvhJointMap(const Skeleton& bvh, const s
     while (j >= 0 && j != p) chain.push_back(j), j = bvh.joints[j].parent;
     if (j == p) {
       std::reverse(chain.begin(), chain.end());
-      const std::vector<Vector3d> rest = bvh.RestPositions();
+      const std::vector<Vector3d> rest = joint_positions.empty() ? bvh.RestPositions() : joint_positions;
       const Vector3d base = rest[p], axis = rest[bvh.IndexOf(top->second)] - base;
       auto fraction = [&](int joint) { return axis.squaredNorm() > 0 ? (rest[joint] - base).dot(axis) / axis.squaredNorm() : 0.0; };
       // The studio skeleton's fractions (spine 0.28, chest 0.65 of pelvis -> neck).
@@ -177,19 +227,22 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
   BvhRetargetResult result;
   result.fps = motion.frame_time_s > 0 ? 1.0 / motion.frame_time_s : 30.0;
   if (!(motion.frame_time_s > 0)) result.warnings.push_back("Frame Time is not positive; assuming 30 fps");
-  result.joint_map = GuessBvhJointMap(bvh, target_names);
-  for (const auto& [target_name, bvh_name] : options.joint_map) {
-    if (target.IndexOf(target_name) < 0)
-      throw UsageError("bvh joint map: the target skeleton has no joint '" + target_name + "'");
-    if (bvh_name.empty()) {
-      result.joint_map.erase(target_name);
-    } else {
-      if (bvh.IndexOf(bvh_name) < 0)
-        throw InputError(source, "the joint map names '" + bvh_name + "' (for " + target_name +
-                                     "), which the BVH does not have");
-      result.joint_map[target_name] = bvh_name;
+  auto with_overrides = [&](std::map<std::string, std::string> map) {
+    for (const auto& [target_name, bvh_name] : options.joint_map) {
+      if (target.IndexOf(target_name) < 0)
+        throw UsageError("bvh joint map: the target skeleton has no joint '" + target_name + "'");
+      if (bvh_name.empty()) {
+        map.erase(target_name);
+      } else {
+        if (bvh.IndexOf(bvh_name) < 0)
+          throw InputError(source, "the joint map names '" + bvh_name + "' (for " + target_name +
+                                       "), which the BVH does not have");
+        map[target_name] = bvh_name;
+      }
     }
-  }
+    return map;
+  };
+  result.joint_map = with_overrides(GuessBvhJointMap(bvh, target_names));
   std::vector<std::string> missing;
   for (const std::string& name : EssentialJoints())
     if (target.IndexOf(name) >= 0 && !result.joint_map.count(name)) missing.push_back(name);
@@ -202,6 +255,21 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
     throw InputError(source, "cannot map the essential target joints " + list + " to the BVH skeleton (joints: " +
                                  joints + "); name them with a joint map, e.g. --bvh-map left_shoulder=LeftArm");
   }
+  // The pose that defines axes and alignment (the rest pose, or a standing frame); when it is a
+  // frame, the spine and chest are picked again by their heights in it.
+  auto bvh_joint = [&](const char* name) { return bvh.IndexOf(result.joint_map.at(name)); };
+  const int top = bvh_joint(result.joint_map.count("head") ? "head" : "neck");
+  const int hips[2] = {bvh_joint("left_hip"), bvh_joint("right_hip")};
+  const int ankles[2] = {bvh_joint("left_ankle"), bvh_joint("right_ankle")};
+  const std::vector<Eigen::Isometry3d> reference =
+      ReferencePose(motion, bvh_joint("pelvis"), top, hips, ankles, &result.reference_frame);
+  std::vector<Vector3d> bvh_rest(reference.size());  // joint positions in the reference pose
+  for (std::size_t j = 0; j < reference.size(); ++j) bvh_rest[j] = reference[j].translation();
+  if (result.reference_frame >= 0) {
+    result.joint_map = with_overrides(GuessBvhJointMap(bvh, target_names, bvh_rest));
+    result.warnings.push_back("the BVH's rest pose is not a standing body; frame " +
+                              std::to_string(result.reference_frame) + " defines its axes and bone alignment");
+  }
   const int nt = target.size();
   std::vector<int> map_index(nt, -1);  // target joint -> BVH joint
   for (int j = 0; j < nt; ++j) {
@@ -211,15 +279,13 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
   }
   auto bvh_of = [&](const char* name) { return map_index[target.IndexOf(name)]; };
 
-  // Axes, units and sizes from the BVH rest pose (raw file axes and units).
-  const std::vector<Vector3d> bvh_rest = bvh.RestPositions();
+  // Axes, units and sizes from the BVH's reference pose (raw file axes and units).
   const std::vector<Vector3d> target_rest = target.RestPositions();
   Vector3d up = Vector3d::UnitY();
   if (options.up_axis == 'z') {
     up = Vector3d::UnitZ();
   } else if (options.up_axis == 'a') {
-    const int top = result.joint_map.count("head") ? bvh_of("head") : bvh_of("neck");
-    const Vector3d v = bvh_rest[top] - 0.5 * (bvh_rest[bvh_of("left_ankle")] + bvh_rest[bvh_of("right_ankle")]);
+    const Vector3d v = bvh_rest[top] - 0.5 * (bvh_rest[ankles[0]] + bvh_rest[ankles[1]]);
     int axis = 0;
     v.cwiseAbs().maxCoeff(&axis);
     up = Vector3d::Unit(axis) * (v(axis) < 0 ? -1.0 : 1.0);
@@ -262,26 +328,36 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
   const Matrix3d m = yaw * z_from_raw;
   result.world_from_bvh = m;
 
-  // Rest alignment per mapped target joint: target child directions onto BVH child directions.
+  // Alignment per mapped target joint, in the mapped BVH joint's frame: its reference rotation
+  // undone after turning the target's rest child directions onto the BVH's reference ones. The
+  // child directions are kept in the BVH joint's frame too (`local_child`).
   std::vector<std::vector<int>> children(nt);
   for (int j = 1; j < nt; ++j) children[target.joints[j].parent].push_back(j);
   const double tiny = 1e-6 * std::max(result.bvh_height, 1e-12);
   std::vector<Matrix3d> align(nt, Matrix3d::Identity());
+  std::vector<Matrix3d> reference_world(nt, Matrix3d::Identity());  // target joints in the reference pose
   std::vector<std::vector<int>> used_children(nt);
+  std::vector<std::vector<Vector3d>> local_child(nt);
   for (int j = 0; j < nt; ++j) {
-    if (map_index[j] < 0) continue;
+    const int b = map_index[j];
+    if (j > 0) reference_world[j] = reference_world[target.joints[j].parent];
+    if (b < 0) continue;
+    const Matrix3d reference_rotation = m * reference[b].linear() * m.transpose();
     std::vector<Vector3d> from, to;
     for (int c : children[j]) {
       if (map_index[c] < 0) continue;
-      const Vector3d d = m * (bvh_rest[map_index[c]] - bvh_rest[map_index[j]]);
+      const Vector3d d = m * (bvh_rest[map_index[c]] - bvh_rest[b]);
       const Vector3d t = target_rest[c] - target_rest[j];
       if (d.norm() < tiny || t.norm() < 1e-9) continue;
       from.push_back(t.normalized());
       to.push_back(d.normalized());
       used_children[j].push_back(c);
+      local_child[j].push_back(reference_rotation.transpose() * d);
     }
-    if (from.empty()) align[j] = j > 0 ? align[target.joints[j].parent] : Matrix3d::Identity();
-    else align[j] = BestRotation(from, to);
+    // A mapped joint without a mapped child (a head over a neck that leans, as CMU's ASF necks
+    // do) holds its rest orientation in the reference pose, rather than its parent's tilt.
+    reference_world[j] = from.empty() ? Matrix3d::Identity() : BestRotation(from, to);
+    align[j] = reference_rotation.transpose() * reference_world[j];
   }
 
   // Per frame: world rotations of the target joints, then local rotations and the root.
@@ -300,10 +376,11 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
       } else {
         const Matrix3d g = m * bvh_world[b].linear() * m.transpose();
         std::vector<Vector3d> predicted, actual;
-        for (int c : used_children[j]) {
+        for (std::size_t k = 0; k < used_children[j].size(); ++k) {
+          const int c = used_children[j][k];
           const Vector3d a = m * (bvh_world[map_index[c]].translation() - bvh_world[b].translation());
           if (a.norm() < tiny) continue;
-          predicted.push_back((g * (m * (bvh_rest[map_index[c]] - bvh_rest[b]))).normalized());
+          predicted.push_back((g * local_child[j][k]).normalized());
           actual.push_back(a.normalized());
         }
         world[j] = BestRotation(predicted, actual) * g * align[j];
@@ -314,6 +391,18 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
     pelvis_at[f] = result.translation_scale * (m * bvh_world[pelvis_bvh].translation());
     result.poses.push_back(std::move(pose));
   }
+
+  // A pelvis faster than any performer (10 m/s) is a jump in the recording, often a reference
+  // pose in the first frames.
+  for (std::size_t f = 1; f < pelvis_at.size(); ++f)
+    if ((pelvis_at[f] - pelvis_at[f - 1]).norm() * result.fps > 10.0) {
+      char text[200];
+      std::snprintf(text, sizeof text,
+                    "the pelvis jumps %.2f m between frames %zu and %zu (%.2f s): start after it (e.g. --bvh-start)",
+                    (pelvis_at[f] - pelvis_at[f - 1]).norm(), f - 1, f, f / result.fps);
+      result.warnings.push_back(text);
+      break;
+    }
 
   // Root placement: scaled BVH pelvis path, centred and put on the floor.
   Vector3d shift = Vector3d::Zero();
@@ -352,13 +441,17 @@ Pose SamplePoses(const std::vector<Pose>& poses, double source_fps, double time_
   return pose;
 }
 
-std::vector<Pose> SampleRetargetedMotion(const BvhRetargetResult& motion, double fps, double speed, int max_frames) {
+std::vector<Pose> SampleRetargetedMotion(const BvhRetargetResult& motion, double fps, double speed, int max_frames,
+                                         double start_s) {
   if (!(fps > 0) || !(speed > 0)) throw UsageError("bvh sampling: fps and speed must be positive");
   std::vector<Pose> poses;
   if (motion.poses.empty()) return poses;
   const double duration_s = (motion.poses.size() - 1) / motion.fps;
+  if (!(start_s >= 0) || start_s > duration_s)
+    throw UsageError("bvh sampling: the start " + std::to_string(start_s) + " s is outside the motion (0 to " +
+                     std::to_string(duration_s) + " s)");
   for (int f = 0; f < max_frames; ++f) {
-    const double t = f / fps * speed;
+    const double t = start_s + f / fps * speed;
     if (t > duration_s + 1e-9) break;
     poses.push_back(SamplePoses(motion.poses, motion.fps, t));
   }

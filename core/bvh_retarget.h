@@ -12,7 +12,8 @@
 // mapped BVH joint drives the bone directly) corrects the swing left by skipped BVH joints.
 // The root translation is scaled by the leg-length ratio (target / BVH). The BVH's up axis
 // (usually Y) is detected and turned to the world's Z; its length unit is detected from the
-// skeleton's height.
+// skeleton's height. Axes, height and the alignment A come from the BVH's rest pose, or from its
+// first standing frame when the rest pose is not a standing body (all bones along one axis).
 
 #include <Eigen/Core>
 #include <map>
@@ -49,6 +50,9 @@ struct BvhRetargetResult {
   // Target joint name -> the BVH joint it follows (mapped joints only).
   std::map<std::string, std::string> joint_map;
   std::vector<std::string> unmapped;  // target joints without a BVH joint (they follow their parent)
+  // The BVH frame whose pose defined the up axis, height and bone alignment because the rest
+  // pose is not a standing body; -1: the rest pose did.
+  int reference_frame = -1;
   char up_axis = 'y';                 // the BVH up axis used
   std::string unit = "m";             // detected length unit: m, cm, mm, inch or cmu (CMU's 1/0.45 inch)
   double metres_per_unit = 1.0;       // of the detected unit
@@ -61,8 +65,10 @@ struct BvhRetargetResult {
 };
 
 // The automatic name mapping: target joint name -> BVH joint name for each target joint that
-// is found in `bvh` (by the name tables; the spine and chest by height, see the file comment).
-std::map<std::string, std::string> GuessBvhJointMap(const Skeleton& bvh, const std::vector<std::string>& target_names);
+// is found in `bvh` (by the name tables; the spine and chest by height, see the file comment, in
+// `joint_positions` of the BVH's joints, or at rest when it is empty).
+std::map<std::string, std::string> GuessBvhJointMap(const Skeleton& bvh, const std::vector<std::string>& target_names,
+                                                    const std::vector<Eigen::Vector3d>& joint_positions = {});
 
 // Retargets `motion` (read with ReadBvh and default options: no scaling, no axis change) to
 // `target` (metres, Z up). Throws InputError naming `source` (the BVH path) when an essential
@@ -80,11 +86,11 @@ BvhRetargetResult RetargetBvhFile(const std::string& path, const Skeleton& targe
 // slerped rotations; clamped to the ends). `poses` must not be empty.
 Pose SamplePoses(const std::vector<Pose>& poses, double source_fps, double time_s);
 
-// Samples a retargeted motion for playback: frame f at time f / fps * speed seconds of the
-// BVH, at most `max_frames` frames and none past the BVH's last frame. Throws UsageError for a
-// non-positive fps or speed.
+// Samples a retargeted motion for playback: frame f at time start_s + f / fps * speed seconds
+// of the BVH, at most `max_frames` frames and none past the BVH's last frame. Throws UsageError
+// for a non-positive fps or speed, or a start outside [0, the motion's duration].
 std::vector<Pose> SampleRetargetedMotion(const BvhRetargetResult& motion, double fps, double speed = 1.0,
-                                         int max_frames = 1 << 30);
+                                         int max_frames = 1 << 30, double start_s = 0.0);
 
 // Parses "target=bvh,target=bvh" (e.g. "left_shoulder=LeftArm") into a joint map. Throws
 // UsageError naming `flag` for a malformed item.

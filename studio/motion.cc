@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <string>
 
@@ -101,6 +102,8 @@ void StudioMotionOptions::Check() const {
   RequireOption(num_frames >= 1, owner + "num_frames", num_frames, ">= 1");
   RequireOption(fps > 0.0 && std::isfinite(fps), owner + "fps", fps, "> 0 and finite");
   RequireOption(speed > 0.0 && std::isfinite(speed), owner + "speed", speed, "> 0 and finite");
+  RequireOption(bvh_start_s >= 0.0 && std::isfinite(bvh_start_s), owner + "bvh_start_s", bvh_start_s,
+                ">= 0 seconds and finite");
 }
 
 double DefaultPerformanceDuration() { return Keys().back().time_s; }
@@ -162,12 +165,67 @@ std::vector<Pose> BvhPerformance(const Skeleton& skeleton, const StudioMotionOpt
   options.Check();
   if (options.bvh_path.empty()) throw UsageError("bvh performance: no BVH file given");
   BvhRetargetResult result = RetargetBvhFile(options.bvh_path, skeleton, options.bvh);
-  std::vector<Pose> poses = SampleRetargetedMotion(result, options.fps, options.speed, options.num_frames);
+  std::vector<Pose> poses =
+      SampleRetargetedMotion(result, options.fps, options.speed, options.num_frames, options.bvh_start_s);
   if (retarget) {
     result.poses.clear();
     *retarget = std::move(result);
   }
   return poses;
+}
+
+PerformancePlacement KeepPerformanceInVolume(std::vector<Pose>* poses, const Skeleton& skeleton,
+                                             const Eigen::Vector2d& centre, double volume_radius_m, double fps,
+                                             bool in_place, const std::string& source) {
+  PerformancePlacement placement;
+  if (poses->empty()) return placement;
+  const Eigen::Vector2d pelvis_rest = skeleton.joints[0].offset_in_parent.head<2>();
+  auto pelvis = [&](const Pose& pose) -> Eigen::Vector2d { return pelvis_rest + pose.root_translation.head<2>(); };
+  // Centres the path's bounding box on `centre`; returns the largest distance from it.
+  auto centre_path = [&]() {
+    Eigen::Vector2d lo = pelvis((*poses)[0]), hi = lo;
+    for (const Pose& pose : *poses) lo = lo.cwiseMin(pelvis(pose)), hi = hi.cwiseMax(pelvis(pose));
+    const Eigen::Vector2d shift = centre - 0.5 * (lo + hi);
+    double farthest = 0.0;
+    for (Pose& pose : *poses) {
+      pose.root_translation.head<2>() += shift;
+      farthest = std::max(farthest, (pelvis(pose) - centre).norm());
+    }
+    return farthest;
+  };
+  placement.travel_m = centre_path();
+  placement.radius_m = placement.travel_m;
+  if (in_place) {
+    // The slow path: a sliding mean over 1 s, the path continued past its ends by point
+    // reflection (so that steady travel at the ends is removed too, not left half-averaged).
+    const int n = static_cast<int>(poses->size());
+    const int half = std::max(1, static_cast<int>(std::lround(0.5 * fps)));
+    auto path = [&](int k) -> Eigen::Vector2d {
+      if (k < 0) return 2 * pelvis((*poses)[0]) - pelvis((*poses)[std::min(-k, n - 1)]);
+      if (k >= n) return 2 * pelvis((*poses)[n - 1]) - pelvis((*poses)[std::max(2 * (n - 1) - k, 0)]);
+      return pelvis((*poses)[k]);
+    };
+    std::vector<Eigen::Vector2d> slow(n);
+    for (int f = 0; f < n; ++f) {
+      Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+      for (int k = f - half; k <= f + half; ++k) sum += path(k);
+      slow[f] = sum / (2 * half + 1);
+    }
+    for (int f = 0; f < n; ++f) (*poses)[f].root_translation.head<2>() -= slow[f] - slow[0];
+    placement.made_in_place = true;
+    placement.radius_m = centre_path();
+  }
+  if (placement.radius_m > volume_radius_m) {
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "the performer's pelvis travels %.2f m from the centre of its path%s, and the cameras see a "
+                  "performer whole only within %.2f m of the studio's centre: choose a shorter excerpt (--frames, "
+                  "--bvh-start)%s",
+                  placement.radius_m, in_place ? " even performed on the spot" : "", volume_radius_m,
+                  in_place ? "" : " or perform it on the spot (--bvh-in-place)");
+    throw InputError(source, text);
+  }
+  return placement;
 }
 
 std::vector<Pose> StudioPerformance(const Skeleton& skeleton, const StudioMotionOptions& options) {

@@ -1,5 +1,7 @@
 #include "studio/rig.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -59,6 +61,42 @@ Rig MakeStudioRig(const StudioRigOptions& options) {
     rig.cameras.push_back(make("holdout" + std::to_string(i), azimuth, options.heldout_radius_m, heldout_heights[i % 4]));
   }
   return rig;
+}
+
+double CaptureVolumeRadius(const Rig& rig, int num_ring_cameras, const Eigen::Vector3d& target_in_world,
+                           double performer_height_m) {
+  const int cameras = std::min(num_ring_cameras, rig.size());
+  // The performer's envelope: a column (the body, arms raised over the head) and, at shoulder
+  // height, a disc of the arms' span; 12 points on each circle.
+  const double h = performer_height_m;
+  const std::array<std::array<double, 2>, 4> circles = {{{0.17 * h, 0.0}, {0.17 * h, 0.6 * h}, {0.17 * h, 1.2 * h},
+                                                         {0.5 * h, 0.8 * h}}};  // radius, height
+  auto fits = [&](double r) {
+    for (int direction = 0; direction < 16; ++direction) {
+      const double a = 2 * M_PI * direction / 16;
+      const Eigen::Vector3d centre(target_in_world.x() + r * std::cos(a), target_in_world.y() + r * std::sin(a), 0.0);
+      for (int c = 0; c < cameras; ++c) {
+        const Camera& camera = rig.cameras[c];
+        for (int k = 0; k < 12; ++k)
+          for (const auto& [radius, z] : circles) {
+            const double b = 2 * M_PI * k / 12;
+            const Eigen::Vector3d point = centre + Eigen::Vector3d(radius * std::cos(b), radius * std::sin(b), z);
+            Eigen::Vector2d pixel;
+            if (!camera.ProjectChecked(point, &pixel) || pixel.x() < 0 || pixel.y() < 0 || pixel.x() > camera.width ||
+                pixel.y() > camera.height)
+              return false;
+          }
+      }
+    }
+    return true;
+  };
+  if (!fits(0.0)) return 0.0;
+  double inside = 0.0, outside = 20.0;
+  while (outside - inside > 0.01) {
+    const double r = 0.5 * (inside + outside);
+    (fits(r) ? inside : outside) = r;
+  }
+  return inside;
 }
 
 }  // namespace confluent

@@ -205,6 +205,14 @@ class SkinnedActor : public ActorSource {
   SkinnedActor(StudioActor actor, const StudioSynthOptions& options)
       : actor_(std::move(actor)), method_(options.skinning) {
     poses_ = StudioPerformance(actor_.skeleton, options.motion);
+    if (!options.motion.bvh_path.empty()) {
+      // A BVH performance may travel: centre it in the ring, or say that it does not fit.
+      const double height = actor_.mesh.vertices.col(2).maxCoeff() - actor_.mesh.vertices.col(2).minCoeff();
+      const double radius = CaptureVolumeRadius(MakeStudioRig(options.rig), options.rig.num_ring_cameras,
+                                                options.rig.target_in_world, height);
+      KeepPerformanceInVolume(&poses_, actor_.skeleton, options.rig.target_in_world.head<2>(), radius,
+                              options.motion.fps, options.motion.bvh_in_place, options.motion.bvh_path);
+    }
   }
   const Mesh& rest_mesh() const override { return actor_.mesh; }
   RowMatrixX3d FrameVertices(int frame) override {
@@ -277,6 +285,8 @@ std::string OptionsJson(const StudioSynthOptions& o, const StudioSynthSummary& s
                                         : o.actor_mesh_path.empty() ? std::string("procedural") : o.actor_mesh_path)
       << "\""
       << ",\n  \"motion\": \"" << (o.motion.bvh_path.empty() ? "default" : o.motion.bvh_path) << "\""
+      << ",\n  \"bvh_start_s\": " << JsonNumber(o.motion.bvh_start_s)
+      << ",\n  \"bvh_in_place\": " << (o.motion.bvh_in_place ? "true" : "false")
       << ",\n  \"actor_vertices\": " << s.num_vertices << ",\n  \"actor_triangles\": " << s.num_triangles
       << ",\n  \"skinning\": \"" << (o.skinning == SkinningMethod::kLinear ? "linear" : "dual_quaternion") << "\""
       << ",\n  \"green_screen\": " << (o.scene.green_screen ? "true" : "false")

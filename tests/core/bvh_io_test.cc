@@ -75,6 +75,57 @@ TEST(BvhIo, ParsesChannelOrdersEndSitesAndKinematics) {
   EXPECT_LT((zup_positions[1] - axes * knee_at).norm(), 1e-9);
 }
 
+// Bandai Namco's layout: a root that never moves above hips that carry the travel in their own
+// translation channels (and every joint with 6 channels that repeat its offset).
+TEST(BvhIo, MotionlessRootAboveTravellingHipsGivesWayToThem) {
+  testing::TempDir dir;
+  std::ofstream(dir / "static_root.bvh") << "HIERARCHY\nROOT joint_Root\n{\n  OFFSET 1 0 0\n"
+                                            "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+                                            "  JOINT Hips\n  {\n    OFFSET 0 90 0\n"
+                                            "    CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+                                            "    JOINT Spine\n    {\n      OFFSET 0 10 0\n"
+                                            "      CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+                                            "      End Site\n      {\n        OFFSET 0 5 0\n      }\n    }\n  }\n}\n"
+                                            "MOTION\nFrames: 2\nFrame Time: 0.5\n"
+                                            "0 0 0 0 0 90  10 90 0 0 0 0  0 10 0 0 0 0\n"
+                                            "0 0 0 0 0 90  20 90 5 90 0 0  0 10 0 0 0 0\n";
+  const BvhMotion motion = ReadBvh(dir / "static_root.bvh");
+  EXPECT_TRUE(motion.warnings.empty()) << motion.warnings[0];
+  ASSERT_EQ(motion.skeleton.size(), 3);  // Hips, Spine, Spine_end
+  EXPECT_EQ(motion.skeleton.joints[0].name, "Hips");
+  EXPECT_EQ(motion.skeleton.joints[0].parent, -1);
+  EXPECT_EQ(motion.channels.size(), 3u);
+  // The root: at (1, 0, 0), turned 90 degrees about y (x -> -z). The hips stand at the root plus
+  // the turned channel translation, the spine 10 up from them, turned with the hips.
+  const Eigen::Matrix3d root = Rot(90, Eigen::Vector3d::UnitY());
+  const Eigen::Vector3d root_at(1, 0, 0);
+  const Eigen::Vector3d hips[2] = {root_at + root * Eigen::Vector3d(10, 90, 0), root_at + root * Eigen::Vector3d(20, 90, 5)};
+  const Eigen::Matrix3d hips_turn[2] = {root, root * Rot(90, Eigen::Vector3d::UnitZ())};
+  for (int f = 0; f < 2; ++f) {
+    const auto p = JointPositions(motion.skeleton, motion.frames[f]);
+    EXPECT_LT((p[0] - hips[f]).norm(), 1e-9) << f;
+    EXPECT_LT((p[1] - (hips[f] + hips_turn[f] * Eigen::Vector3d(0, 10, 0))).norm(), 1e-9) << f;
+    EXPECT_LT((p[2] - (hips[f] + hips_turn[f] * Eigen::Vector3d(0, 15, 0))).norm(), 1e-9) << f;
+  }
+}
+
+// A moving root keeps its place; the hips' translation channels cannot be kept and are named.
+TEST(BvhIo, TranslationOfAJointBelowAMovingRootIsIgnoredWithAWarning) {
+  testing::TempDir dir;
+  std::ofstream(dir / "moving_root.bvh") << "HIERARCHY\nROOT joint_Root\n{\n  OFFSET 0 0 0\n"
+                                            "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+                                            "  JOINT Hips\n  {\n    OFFSET 0 90 0\n"
+                                            "    CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+                                            "    End Site\n    {\n      OFFSET 0 5 0\n    }\n  }\n}\n"
+                                            "MOTION\nFrames: 2\nFrame Time: 0.5\n"
+                                            "0 0 0 0 0 0  10 90 0 0 0 0\n"
+                                            "1 0 0 0 0 0  20 90 5 0 0 0\n";
+  const BvhMotion motion = ReadBvh(dir / "moving_root.bvh");
+  EXPECT_EQ(motion.skeleton.joints[0].name, "joint_Root");
+  ASSERT_EQ(motion.warnings.size(), 1u);
+  EXPECT_NE(motion.warnings[0].find("Hips"), std::string::npos) << motion.warnings[0];
+}
+
 TEST(BvhIo, BadFilesNameFileAndLine) {
   testing::TempDir dir;
   auto expect_error = [&](const std::string& text, const std::string& needle) {

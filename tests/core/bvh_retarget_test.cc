@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/bvh_io.h"
 #include "core/bvh_retarget.h"
 #include "core/error.h"
 #include "tests/support/bvh_fixture.h"
@@ -193,6 +194,89 @@ TEST(BvhRetarget, BadFilesGiveClearErrors) {
   EXPECT_EQ(RetargetBvhFile(dir / "odd.bvh", target, options).joint_map.at("left_elbow"), "bone8");
   options.joint_map["left_wrist"] = "nosuchjoint";
   EXPECT_THROW(RetargetBvhFile(dir / "odd.bvh", target, options), InputError);
+}
+
+// The same motion re-expressed over a rest pose that is no standing body: every joint's frame
+// turned so that its first child's offset lies along +x, as in Bandai Namco's files, the frames'
+// rotations compensating (r'_j = C_parent^T r_j C_j), so every joint stays where it was.
+BvhMotion WithRestAlongX(const BvhMotion& motion) {
+  const int n = motion.skeleton.size();
+  std::vector<Matrix3d> turn(n, Matrix3d::Identity());
+  for (int j = 0; j < n; ++j)
+    for (int c = j + 1; c < n; ++c)
+      if (motion.skeleton.joints[c].parent == j) {
+        const Vector3d offset = motion.skeleton.joints[c].offset_in_parent;
+        if (offset.norm() > 0) turn[j] = Eigen::Quaterniond::FromTwoVectors(Vector3d::UnitX(), offset).toRotationMatrix();
+        break;
+      }
+  BvhMotion out = motion;
+  for (int j = 1; j < n; ++j) {
+    const int parent = motion.skeleton.joints[j].parent;
+    out.skeleton.joints[j].offset_in_parent = turn[parent].transpose() * motion.skeleton.joints[j].offset_in_parent;
+  }
+  for (std::size_t f = 0; f < motion.frames.size(); ++f)
+    for (int j = 0; j < n; ++j) {
+      const int parent = motion.skeleton.joints[j].parent;
+      const Matrix3d before = parent < 0 ? Matrix3d(Matrix3d::Identity()) : Matrix3d(turn[parent].transpose());
+      out.frames[f].local_rotations[j] =
+          Eigen::Quaterniond(before * motion.frames[f].local_rotations[j].toRotationMatrix() * turn[j]).normalized();
+    }
+  return out;
+}
+
+TEST(BvhRetarget, RestPoseThatIsNoStandingBodyGivesTheSameBody) {
+  testing::TempDir dir;
+  std::ofstream(dir / "m.bvh") << SyntheticBvh(TestFrames());
+  const BvhMotion motion = ReadBvh(dir / "m.bvh");
+  const BvhMotion along_x = WithRestAlongX(motion);
+  // The re-expression keeps every joint where it was, and its rest pose is a line along +x.
+  for (std::size_t f = 0; f < motion.frames.size(); ++f) {
+    const auto a = JointPositions(motion.skeleton, motion.frames[f]), b = JointPositions(along_x.skeleton, along_x.frames[f]);
+    for (int j = 0; j < motion.skeleton.size(); ++j) ASSERT_LT((a[j] - b[j]).norm(), 1e-9);
+  }
+  const auto line = along_x.skeleton.RestPositions();
+  EXPECT_GT((line[along_x.skeleton.IndexOf("Head")] - line[0]).x(), 0);
+  EXPECT_GT((line[along_x.skeleton.IndexOf("LeftFoot")] - line[0]).x(), 0);
+
+  const Skeleton target = StudioLikeSkeleton();
+  const BvhRetargetResult expected = RetargetBvh(motion, target);
+  const BvhRetargetResult result = RetargetBvh(along_x, target);
+  EXPECT_EQ(expected.reference_frame, -1);
+  EXPECT_EQ(result.reference_frame, 0);  // frame 0 is the T-pose
+  EXPECT_EQ(result.up_axis, 'y');
+  EXPECT_EQ(result.unit, expected.unit);
+  EXPECT_NEAR(result.translation_scale, expected.translation_scale, 1e-12);
+  ASSERT_EQ(result.poses.size(), expected.poses.size());
+  for (std::size_t f = 0; f < result.poses.size(); ++f) {
+    const auto want = WorldFromJoint(target, expected.poses[f]), got = WorldFromJoint(target, result.poses[f]);
+    for (int j = 0; j < target.size(); ++j) {
+      EXPECT_LT((want[j].translation() - got[j].translation()).norm(), 1e-9) << "frame " << f << " joint " << j;
+      EXPECT_LT((want[j].linear() - got[j].linear()).norm(), 1e-9) << "frame " << f << " joint " << j;
+    }
+  }
+}
+
+// CMU's ASF exports have no head joint: LowerNeck -> Neck, where the upper neck turns the head.
+TEST(BvhRetarget, UpperOfTwoNeckJointsTurnsTheHead) {
+  testing::TempDir dir;
+  std::ofstream(dir / "m.bvh") << SyntheticBvh(TestFrames(), {{"Neck", "LowerNeck"}, {"Head", "Neck"}});
+  const BvhRetargetResult result = RetargetBvhFile(dir / "m.bvh", StudioLikeSkeleton());
+  EXPECT_EQ(result.joint_map.at("neck"), "LowerNeck");
+  EXPECT_EQ(result.joint_map.at("head"), "Neck");
+  EXPECT_EQ(result.joint_map.at("head_end"), "Neck_end");  // its End Site
+  EXPECT_EQ(result.joint_map.at("left_hand_end"), "LeftHand_end");
+  EXPECT_TRUE(result.unmapped.empty());
+}
+
+// A recording whose first frame stands somewhere else (a reference pose) is pointed out.
+TEST(BvhRetarget, PelvisJumpBetweenFramesIsReported) {
+  testing::TempDir dir;
+  std::vector<std::string> frames = TestFrames();
+  frames[1] = Frame({300, 0, 0}, {});  // 3 m (in centimetres) in 0.02 s
+  std::ofstream(dir / "m.bvh") << SyntheticBvh(frames);
+  const BvhRetargetResult result = RetargetBvhFile(dir / "m.bvh", StudioLikeSkeleton());
+  ASSERT_FALSE(result.warnings.empty());
+  EXPECT_NE(result.warnings.back().find("between frames 0 and 1"), std::string::npos) << result.warnings.back();
 }
 
 TEST(BvhRetarget, RealCmuFile) {

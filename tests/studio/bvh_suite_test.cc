@@ -1,0 +1,104 @@
+// The motion suite's BVH clips (../shared/data/bvh/suite/, skipped when absent), performed by the
+// studio actor as `synth --bvh` performs them: each source skeleton (CMU, SFU, Bandai Namco,
+// Perfume, three.js, a Z-up file without a head joint) gives an actor of the right height,
+// upright at the first frame, whose every segment moves and whose pelvis stays in the capture
+// volume.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+
+#include "core/body_model.h"
+#include "core/body_segments.h"
+#include "studio/actor.h"
+#include "studio/motion.h"
+#include "studio/rig.h"
+#include "tests/support/test_support.h"
+
+namespace confluent {
+namespace {
+
+using Eigen::Vector3d;
+
+struct SuiteClip {
+  const char* file;
+  double start_s;  // where the suite's excerpt starts
+  bool in_place;   // performed on the spot (the clip travels further than the cameras see)
+};
+
+class BvhSuiteClip : public ::testing::TestWithParam<SuiteClip> {};
+
+TEST_P(BvhSuiteClip, ActorIsUprightOfItsHeightMovesEverySegmentAndStaysInView) {
+  const std::string path = testing::SharedDataPath(std::string("bvh/suite/") + GetParam().file);
+  if (path.empty()) GTEST_SKIP() << "shared data bvh/suite/" << GetParam().file << " not available";
+  const StudioActorOptions actor_options;
+  const Skeleton skeleton = MakeStudioSkeleton(actor_options);
+  StudioMotionOptions options;
+  options.bvh_path = path;
+  options.fps = 25.0;
+  options.num_frames = 125;  // 5 s
+  options.bvh_start_s = GetParam().start_s;
+  BvhRetargetResult retarget;
+  std::vector<Pose> poses = BvhPerformance(skeleton, options, &retarget);
+  ASSERT_GE(poses.size(), 60u);
+  // Placed in the default studio as `synth` places it.
+  const StudioRigOptions rig_options;
+  const double volume = CaptureVolumeRadius(MakeStudioRig(rig_options), rig_options.num_ring_cameras,
+                                            rig_options.target_in_world, actor_options.height_m);
+  const PerformancePlacement placement = KeepPerformanceInVolume(
+      &poses, skeleton, rig_options.target_in_world.head<2>(), volume, options.fps, GetParam().in_place, path);
+
+  // Height and uprightness at the first frame.
+  const std::vector<Vector3d> first = JointPositions(skeleton, poses[0]);
+  double lowest = 1e9;
+  for (int j : {kJointLeftAnkle, kJointRightAnkle, kJointLeftToe, kJointRightToe}) lowest = std::min(lowest, first[j].z());
+  const double height = first[kJointHeadEnd].z() - lowest;
+  const Vector3d trunk = (first[kJointNeck] - first[kJointPelvis]).normalized();
+  const double lean_deg = std::acos(std::clamp(trunk.z(), -1.0, 1.0)) * 180.0 / M_PI;
+
+  // How far each segment turns over the clip (largest angle from its first-frame orientation).
+  const std::array<int, kNumBodySegments> segment_joint = StudioSegmentJoints();
+  std::array<double, kNumBodySegments> turned{};
+  const auto first_world = WorldFromJoint(skeleton, poses[0]);
+  double farthest = 0.0;
+  for (const Pose& pose : poses) {
+    const auto world = WorldFromJoint(skeleton, pose);
+    for (int s = 0; s < kNumBodySegments; ++s) {
+      const Eigen::Matrix3d delta = world[segment_joint[s]].linear() * first_world[segment_joint[s]].linear().transpose();
+      turned[s] = std::max(turned[s], Eigen::AngleAxisd(delta).angle() * 180.0 / M_PI);
+    }
+    farthest = std::max(farthest, world[kJointPelvis].translation().head<2>().norm());
+  }
+  double least_turn = 1e9;
+  for (double t : turned) least_turn = std::min(least_turn, t);
+  std::printf("%-34s unit %-4s up %c height %.3f lean %.1f deg least segment turn %.1f deg travel %.2f m, "
+              "placed within %.2f of %.2f m\n", GetParam().file, retarget.unit.c_str(), retarget.up_axis, height,
+              lean_deg, least_turn, placement.travel_m, farthest, volume);
+  for (const auto& w : retarget.warnings) std::printf("  warning: %s\n", w.c_str());
+  for (const auto& u : retarget.unmapped) std::printf("  unmapped: %s\n", u.c_str());
+
+  EXPECT_NEAR(height, actor_options.height_m, 0.15 * actor_options.height_m);
+  EXPECT_LT(lean_deg, 30.0);
+  EXPECT_GT(least_turn, 3.0);
+  EXPECT_LE(farthest, volume + 1e-9);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Suite, BvhSuiteClip,
+    ::testing::Values(SuiteClip{"threejs_pirouette.bvh", 0, true}, SuiteClip{"cmu_05_20_modern_dance.bvh", 0, false},
+                      SuiteClip{"cmu_94_01_indian_dance.bvh", 0, true}, SuiteClip{"cmu_01_01_forward_jumps_turn.bvh", 0, true},
+                      SuiteClip{"perfume_B_dance.bvh", 1.0, true}, SuiteClip{"bvhviewer_jump_from_stand.bvh", 0, false},
+                      SuiteClip{"sfu_0007_Cartwheel001.bvh", 0, true}, SuiteClip{"sfu_0005_Jogging001.bvh", 0, true},
+                      SuiteClip{"sfu_0005_JumpRope001.bvh", 0, false}, SuiteClip{"sfu_0005_SideSkip001.bvh", 0, true},
+                      SuiteClip{"bandai_kick_normal_001.bvh", 0, false}, SuiteClip{"bandai_punch_normal_002.bvh", 0, false}),
+    [](const ::testing::TestParamInfo<SuiteClip>& info) {
+      std::string name = info.param.file;
+      name = name.substr(0, name.find('.'));
+      for (char& c : name) if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return name;
+    });
+
+}  // namespace
+}  // namespace confluent
