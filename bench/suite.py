@@ -50,13 +50,19 @@ CLIPS = {
     "sfu_0005_SideSkip001": None, "bandai_kick_normal_001": None, "bandai_punch_normal_002": None,
 }
 
+# Clips whose pelvis travels further than the studio's cameras see a performer whole (synth
+# refuses them otherwise): performed on the spot, their slow travel removed (--bvh-in-place).
+IN_PLACE = {"threejs_pirouette", "cmu_94_01_indian_dance", "cmu_01_01_forward_jumps_turn", "perfume_B_dance",
+            "sfu_0007_Cartwheel001", "sfu_0005_Jogging001", "sfu_0005_SideSkip001"}
+
 
 def captures(work):
     """The suite: name, synth args, the path it needs (skipped when absent), optional BVH start."""
     caps = [dict(name="builtin", args=[])]
     for clip, start in CLIPS.items():
         path = os.path.join(BVH_DIR, clip + ".bvh")
-        caps.append(dict(name=clip, args=["--bvh", path], needs=path, bvh_start=start))
+        args = ["--bvh", path] + (["--bvh-in-place"] if clip in IN_PLACE else [])
+        caps.append(dict(name=clip, args=args, needs=path, bvh_start=start))
     caps += [
         dict(name="body_heavy", args=["--girth", "1.3"]),
         dict(name="body_small", args=["--actor-height", "1.55", "--girth", "0.9"]),

@@ -127,11 +127,11 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
       std::vector<TemplatePose> poses;
       std::vector<double> ious;
       BodyShape saved_shape;
-      for (int back = std::max(0, frame - 4); back < frame; ++back) {
+      for (int back = std::max(0, frame - Tracker::kIouWindow); back < frame; ++back) {
         if (!TrackedFrameFinished(inputs.folder, back)) continue;
         const PosesFile state = read_state(back);
         saved_shape = state.shape;
-        poses.push_back(state.frames[0].pose);
+        if (back >= frame - 4) poses.push_back(state.frames[0].pose);
         ious.push_back(state.frames[0].mean_iou);
       }
       tracker.Resume(saved_shape, poses, ious);

@@ -14,6 +14,7 @@
 #include "calib/rig_check.h"
 #include "core/error.h"
 #include "silhouette/overlap.h"
+#include "tracking/limb_hypotheses.h"
 
 namespace confluent {
 namespace {
@@ -120,6 +121,10 @@ void TrackerOptions::Check() const {
   RequireOption(empty_mask_fraction >= 0 && empty_mask_fraction < 1, owner + "empty_mask_fraction",
                 empty_mask_fraction, "in [0, 1)");
   RequireOption(iou_downscale >= 0, owner + "iou_downscale", iou_downscale, ">= 0");
+  RequireOption(limb_search_drop >= 0 && limb_search_drop < 1, owner + "limb_search_drop", limb_search_drop,
+                "in [0, 1)");
+  RequireOption(limb_fits >= 1 && limb_fits <= 16, owner + "limb_fits", limb_fits, "in [1, 16]");
+  RequireOption(limb_min_gain >= 0 && limb_min_gain < 1, owner + "limb_min_gain", limb_min_gain, "in [0, 1)");
 }
 
 Tracker::Tracker(const Rig& rig, const std::vector<bool>& excluded, const TrackerOptions& options)
@@ -147,6 +152,36 @@ std::vector<bool> Tracker::UsableCameras(const std::vector<Image>& masks, std::v
     use[c] = true;
   }
   return use;
+}
+
+void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
+                          const SilhouetteObservations& observations, TrackedFrame* result) {
+  SilhouetteFitOptions fit = options_.fit;
+  fit.prior_weight = 0.2;  // towards the hypothesis itself
+  fit.coarse_to_fine = false;
+  for (Limb limb : kAllLimbs) {
+    std::vector<TrackedFrame> scored;
+    for (const TemplatePose& hypothesis : LimbHypotheses(body_, result->pose, limb)) {
+      TrackedFrame candidate;
+      candidate.pose = hypothesis;
+      Evaluate(shape_, masks, use, &candidate);
+      scored.push_back(std::move(candidate));
+    }
+    const int keep = std::min<int>(options_.limb_fits, static_cast<int>(scored.size()));
+    std::partial_sort(scored.begin(), scored.begin() + keep, scored.end(),
+                      [](const TrackedFrame& a, const TrackedFrame& b) { return a.mean_iou > b.mean_iou; });
+    for (int k = 0; k < keep; ++k) {
+      TrackedFrame candidate = scored[k];
+      candidate.frame = result->frame;
+      candidate.fit = FitTemplateToSilhouettes(body_, observations, fit, &shape_, &candidate.pose);
+      Evaluate(shape_, masks, use, &candidate);
+      if (candidate.mean_iou > result->mean_iou + options_.limb_min_gain) {
+        candidate.flags = result->flags;
+        candidate.flags.push_back(std::string("limb:") + LimbName(limb));
+        *result = std::move(candidate);
+      }
+    }
+  }
 }
 
 void Tracker::Evaluate(const BodyShape& shape, const std::vector<Image>& masks, const std::vector<bool>& use,
@@ -254,6 +289,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
       shape_ = shape;
     }
   }
+  if (options_.limb_search) SearchLimbs(masks, use, observations, &result);
   result.flags.push_back("initialized");
   initialized_ = true;
   history_.push_back(result.pose);
@@ -335,9 +371,15 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
     result.flags.push_back(result.mean_iou > before_iou ? "recovered" : "bad");
     if (result.mean_iou < options_.bad_frame_iou) result.flags.push_back("low_overlap");
   }
+  // A lost limb: the overlap falls below what this performance has shown lately.
+  const std::vector<double> window(iou_history_.end() - std::min<std::size_t>(iou_history_.size(), kIouWindow),
+                                   iou_history_.end());
+  if (options_.limb_search && result.mean_iou < Median(window) - options_.limb_search_drop)
+    SearchLimbs(masks, use, observations, &result);
   history_.push_back(result.pose);
   if (history_.size() > 4) history_.erase(history_.begin());
   iou_history_.push_back(result.mean_iou);
+  if (iou_history_.size() > static_cast<std::size_t>(kIouWindow)) iou_history_.erase(iou_history_.begin());
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   return result;

@@ -42,6 +42,14 @@ struct TrackerOptions {
   double bad_frame_iou_drop = 0.1; // ... or a drop of this much below the running median
   double empty_mask_fraction = 0.2;  // a camera with less foreground than this fraction of the median camera is skipped
   int iou_downscale = 0;           // resolution reduction of the per-frame IoU check (0 = automatic)
+  // Lost limbs: at initialisation, and when a frame's mean IoU falls `limb_search_drop` below
+  // the median of the last Tracker::kIouWindow frames, each limb is tried in its canonical placements
+  // (tracking/limb_hypotheses.h), scored unfitted by overlap; the `limb_fits` best are fitted
+  // and one is kept when it raises the frame's mean IoU by `limb_min_gain`.
+  bool limb_search = true;
+  double limb_search_drop = 0.02;
+  int limb_fits = 2;
+  double limb_min_gain = 0.005;
   // Throws UsageError for out-of-range values.
   void Check() const;
 };
@@ -70,8 +78,13 @@ class Tracker {
   TrackedFrame Initialize(int frame, const std::vector<Image>& masks);
   // Tracks the next frame (Initialize first). Masks: one per rig camera (0/255).
   TrackedFrame Track(int frame, const std::vector<Image>& masks);
+  // How many frames back the lost-limb check looks (the median of their mean IoUs): Resume
+  // needs the IoUs of this many frames before for a resumed run to track as an uninterrupted one.
+  static constexpr int kIouWindow = 25;
+
   // Continues from saved state instead of Initialize (a resumed run, or a shard boundary): the
-  // fitted shape and the accepted poses and mean IoUs of the frames just before, oldest first.
+  // fitted shape, the accepted poses of the frames just before (the last 4 are used) and their
+  // mean IoUs (the last kIouWindow), oldest first.
   void Resume(const BodyShape& shape, const std::vector<TemplatePose>& recent_poses, const std::vector<double>& recent_ious);
 
   bool initialized() const { return initialized_; }
@@ -83,6 +96,10 @@ class Tracker {
   std::vector<bool> UsableCameras(const std::vector<Image>& masks, std::vector<std::string>* flags) const;
   void Evaluate(const BodyShape& shape, const std::vector<Image>& masks, const std::vector<bool>& use,
                 TrackedFrame* result) const;
+  // Re-places each limb of `result` (fitted to `observations`) where it overlaps the masks
+  // better, flagging "limb:<name>" for each limb moved.
+  void SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
+                   const SilhouetteObservations& observations, TrackedFrame* result);
 
   Rig rig_;
   std::vector<bool> excluded_;

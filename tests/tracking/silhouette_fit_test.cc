@@ -8,19 +8,10 @@
 #include "calib/rig_check.h"
 #include "silhouette/overlap.h"
 #include "tracking/tracker.h"
+#include "tests/support/camera_ring.h"
 
 namespace confluent {
 namespace {
-
-Rig RingRig(int n, int width, int height) {
-  Rig rig;
-  for (int i = 0; i < n; ++i) {
-    const double a = 2 * M_PI * i / n + 0.2;
-    rig.cameras.push_back(LookAtCamera("cam" + std::to_string(i), Eigen::Vector3d(3.6 * std::sin(a), 3.6 * std::cos(a), 1.5 + 0.4 * (i % 2)),
-                                 Eigen::Vector3d(0, 0, 1.0), width, height, 1.1 * width));
-  }
-  return rig;
-}
 
 TemplatePose TruePose() {
   TemplatePose pose;
@@ -48,7 +39,7 @@ double MeanJointError(const BodyTemplate& body, const BodyShape& shape, const Te
 TEST(SilhouetteFit, RecoversAKnownPoseFromAPerturbedStart) {
   const BodyTemplate body;
   const BodyShape shape = BodyShape::Uniform(1.7);
-  const Rig rig = RingRig(6, 320, 240);
+  const Rig rig = testing::CameraRing(6, 320, 240);
   const TemplatePose truth = TruePose();
   const Mesh mesh = body.PosedMesh(shape, truth);
   std::vector<Image> masks;
@@ -90,7 +81,7 @@ TEST(SilhouetteFit, InitialisesShapeAndPoseFromTheVisualHull) {
   truth_shape.girth_scale[int(BodySegment::kUpperTorso)] *= 1.1;
   truth_shape.length_scale[int(BodySegment::kLeftThigh)] *= 1.05;
   truth_shape.length_scale[int(BodySegment::kRightThigh)] *= 1.05;
-  const Rig rig = RingRig(6, 320, 240);
+  const Rig rig = testing::CameraRing(6, 320, 240);
   TemplatePose truth;
   truth.root_translation = Eigen::Vector3d(0.2, 0.1, 0.0);
   truth.root_rotation = Eigen::Vector3d(0, 0, 2.2);
@@ -126,7 +117,7 @@ TEST(SilhouetteFit, RecoversKnownGirthsWithoutShrinking) {
   const BodyShape start_shape = BodyShape::Uniform(1.7);
   BodyShape truth_shape = start_shape;
   for (double& g : truth_shape.girth_scale) g *= 1.12;
-  const Rig rig = RingRig(8, 320, 240);
+  const Rig rig = testing::CameraRing(8, 320, 240);
   const TemplatePose truth = TruePose();
   const Mesh mesh = body.PosedMesh(truth_shape, truth);
   std::vector<Image> masks;

@@ -13,20 +13,10 @@
 #include "tracking/motion_io.h"
 #include "tracking/silhouette_fit.h"
 #include "tracking/tracker.h"
+#include "tests/support/camera_ring.h"
 
 namespace confluent {
 namespace {
-
-Rig CameraRing(int n, int width, int height) {
-  Rig rig;
-  for (int i = 0; i < n; ++i) {
-    const double a = 2 * M_PI * i / n + 0.3;
-    rig.cameras.push_back(LookAtCamera("cam" + std::to_string(i),
-                                       Eigen::Vector3d(3.6 * std::sin(a), 3.6 * std::cos(a), 1.4 + 0.5 * (i % 2)),
-                                       Eigen::Vector3d(0, 0, 0.9), width, height, 1.1 * width));
-  }
-  return rig;
-}
 
 // A standing pose with the arms away from the body.
 TemplatePose StandingPose() {
@@ -84,7 +74,7 @@ TEST(SkirtFit, SkirtExtendsTheLowerTorsoDownAndRoundTripsThroughPosesJson) {
 TEST(SkirtFit, RecoversAKnownSkirtFromItsMasks) {
   const BodyTemplate body;
   const BodyShape truth = SkirtedShape();
-  const Rig rig = CameraRing(8, 320, 240);
+  const Rig rig = testing::CameraRing(8, 320, 240, 0.3, 1.4, 0.5, Eigen::Vector3d(0, 0, 0.9));
   const TemplatePose pose_truth = StandingPose();
   const Mesh mesh = body.PosedMesh(truth, pose_truth);
   std::vector<Image> masks;
@@ -116,7 +106,7 @@ TEST(SkirtFit, RecoversAKnownSkirtFromItsMasks) {
 TEST(SkirtFit, InitialisationFindsTheSkirt) {
   const BodyTemplate body;
   const BodyShape truth = SkirtedShape();
-  const Rig rig = CameraRing(6, 240, 180);
+  const Rig rig = testing::CameraRing(6, 240, 180, 0.3, 1.4, 0.5, Eigen::Vector3d(0, 0, 0.9));
   const Mesh mesh = body.PosedMesh(truth, StandingPose());
   std::vector<Image> masks;
   for (const Camera& camera : rig.cameras) masks.push_back(RasterizeClosedMesh(mesh, camera));

@@ -1,0 +1,88 @@
+#include "tracking/limb_hypotheses.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+namespace confluent {
+namespace {
+
+using Eigen::Vector3d;
+
+constexpr double kDeg = M_PI / 180.0;
+
+// Upper-limb directions in the parent's rest-aligned frame (x lateral towards the limb's side,
+// y forward, z up; mirrored for the right side), with the elbow/knee angles tried for each.
+struct Placement {
+  Vector3d direction;
+  std::vector<double> bend_deg;
+};
+
+const std::vector<Placement>& ArmPlacements() {
+  static const std::vector<Placement> placements = {
+      {{0.17, 0.0, -1.0}, {5, 90}},    // down beside the body
+      {{1.0, 0.0, 0.0}, {5, 90}},      // spread sideways
+      {{0.35, 0.0, 1.0}, {5}},         // raised over the head
+      {{0.2, 1.0, 0.0}, {5, 90}},      // forward
+      {{0.2, 0.7, -0.7}, {5, 110}},    // forward and down, or guarding the chest
+      {{0.3, 0.6, 0.75}, {5}},         // forward and up
+      {{0.2, -0.5, -0.85}, {5}},       // back
+      {{-0.3, 0.7, -0.6}, {60, 120}},  // across the body
+  };
+  return placements;
+}
+
+const std::vector<Placement>& LegPlacements() {
+  static const std::vector<Placement> placements = {
+      {{0.05, 0.0, -1.0}, {0, 90}},   // standing, or the shank lifted back
+      {{0.05, 0.7, -0.7}, {0, 90}},   // thigh forward (a step, a knee raised)
+      {{0.05, 1.0, -0.1}, {0, 90}},   // kicking forward, or knee up high
+      {{0.7, 0.0, -0.7}, {0}},        // sideways
+      {{0.05, -0.5, -0.85}, {0, 60}}, // back
+  };
+  return placements;
+}
+
+}  // namespace
+
+const char* LimbName(Limb limb) {
+  switch (limb) {
+    case Limb::kLeftArm: return "left_arm";
+    case Limb::kRightArm: return "right_arm";
+    case Limb::kLeftLeg: return "left_leg";
+    case Limb::kRightLeg: return "right_leg";
+  }
+  return "limb";
+}
+
+std::vector<TemplatePose> LimbHypotheses(const BodyTemplate& body, const TemplatePose& pose, Limb limb) {
+  const bool arm = limb == Limb::kLeftArm || limb == Limb::kRightArm;
+  const bool left = limb == Limb::kLeftArm || limb == Limb::kLeftLeg;
+  const int root = arm ? (left ? kJointLeftShoulder : kJointRightShoulder) : (left ? kJointLeftHip : kJointRightHip);
+  const int middle = root + 1;  // elbow or knee
+  // The body's left is -x: a direction "towards the limb's side" has x < 0 on the left.
+  const double side = left ? -1.0 : 1.0;
+  const auto& rest = body.generic_rest();
+  const Vector3d rest_direction = (rest[middle] - rest[root]).normalized();
+  const JointDof& bend_dof = body.dofs()[middle];
+  std::vector<TemplatePose> hypotheses;
+  for (const Placement& placement : arm ? ArmPlacements() : LegPlacements()) {
+    const Vector3d direction =
+        Vector3d(side * placement.direction.x(), placement.direction.y(), placement.direction.z()).normalized();
+    const Eigen::AngleAxisd turn(Eigen::Quaterniond::FromTwoVectors(rest_direction, direction));
+    for (double bend : placement.bend_deg) {
+      TemplatePose hypothesis = pose;
+      const Vector3d rotation = turn.angle() * turn.axis();
+      hypothesis.dofs[root] = {rotation.x(), rotation.y(), rotation.z()};
+      // Elbows flex forwards (positive); knees bend backwards (negative).
+      hypothesis.dofs[middle] = {0.0, 0.0, 0.0};
+      hypothesis.dofs[middle][0] = (arm ? 1.0 : -1.0) * bend * kDeg;
+      hypothesis.dofs[middle][0] = std::clamp(hypothesis.dofs[middle][0], bend_dof.lower[0], bend_dof.upper[0]);
+      body.ClampToLimits(&hypothesis);
+      hypotheses.push_back(hypothesis);
+    }
+  }
+  return hypotheses;
+}
+
+}  // namespace confluent

@@ -1,0 +1,24 @@
+#pragma once
+// Other places a limb may be, for re-initialising a limb the tracker has lost (an arm left
+// across the torso while the real one is raised): each hypothesis is the given pose with one
+// limb moved to a canonical placement (arm down, spread, raised, forward, across the chest ...;
+// leg straight, forward, kicking, sideways, back), the elbow or knee straight or bent.
+// Directions are relative to the torso (the chest for arms, the pelvis for legs).
+
+#include <vector>
+
+#include "tracking/body_template.h"
+
+namespace confluent {
+
+enum class Limb { kLeftArm, kRightArm, kLeftLeg, kRightLeg };
+constexpr Limb kAllLimbs[] = {Limb::kLeftArm, Limb::kRightArm, Limb::kLeftLeg, Limb::kRightLeg};
+
+// "left_arm", "right_arm", "left_leg", "right_leg".
+const char* LimbName(Limb limb);
+
+// `pose` with `limb` moved to each canonical placement (within the joint limits), the rest of
+// the body unchanged.
+std::vector<TemplatePose> LimbHypotheses(const BodyTemplate& body, const TemplatePose& pose, Limb limb);
+
+}  // namespace confluent
