@@ -16,4 +16,6 @@ heavy='^(SambaRealMotion|SilhouetteFit|SkirtFit|LimbRecovery|ScanRegistration|Ca
 step ./dev test --sanitize -L unit -E "$heavy"
 step ./dev fuzz --seconds 30 --seed 1
 step ./dev demo --preset tiny --out /tmp/confluent-ci-demo
+# The motion suite's tiny variant: fails when a capture falls below bench/suite_floors_tiny.json.
+step ./dev suite --preset tiny --check --out /tmp/confluent-ci-suite
 step ./dev test

@@ -302,7 +302,8 @@ def main():
     parser.add_argument("--threads", "--jobs", type=int, help="passed to synth and run as --threads")
     parser.add_argument("--table", help="Markdown table (default bench/SUITE.md; tiny: WORK/tiny/SUITE.md)")
     parser.add_argument("--floors", help="JSON of per-capture floors (default bench/suite_floors_<preset>.json)")
-    parser.add_argument("--check", action="store_true", help="exit 1 when a metric is below its floor")
+    parser.add_argument("--check", action="store_true",
+                        help="exit 1 when a metric is below its floor; without --only, only the captures the floors file names")
     parser.add_argument("--keep", action="store_true", help="reuse finished captures and runs")
     args = parser.parse_args()
 
@@ -321,6 +322,9 @@ def main():
     floors_path = args.floors or os.path.join(REPO, "bench", f"suite_floors_{args.preset}.json")
     if args.check and not os.path.exists(floors_path):
         sys.exit(f"suite: --check needs a floors file ({floors_path} is absent)")
+    if args.check and not args.only:  # the captures that have floors
+        floored = json.load(open(floors_path))
+        caps = [c for c in caps if c["name"] in floored]
     table = args.table or (os.path.join(preset_dir, "SUITE.md") if args.preset == "tiny" else os.path.join(REPO, "bench", "SUITE.md"))
     synth_help = subprocess.run([exe, "synth", "--help"], capture_output=True, text=True).stdout
     os.makedirs(preset_dir, exist_ok=True)
