@@ -18,7 +18,18 @@ ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh
     registration_options.initial_shape = *options.known_shape;
   }
   registration_options.initial_pose = options.initial_pose;
-  result.registration = RegisterTemplateToScan(body, scan, registration_options, scan_path);
+  try {
+    result.registration = RegisterTemplateToScan(body, scan, registration_options, scan_path);
+  } catch (const InputError& seeded_failure) {
+    if (!options.known_shape && !options.initial_pose) throw;
+    // The tracked shape or first pose can be poor (a coarse capture, an unusual first frame):
+    // register as `confluent correspond` does, from the scan alone with the shape fitted. The
+    // reference below keeps the tracked shape, which the tracked template meshes have.
+    result.registration = RegisterTemplateToScan(body, scan, ScanRegistrationOptions(), scan_path);
+    result.registration.warnings.push_back(std::string("the registration from the tracked shape and pose failed (") +
+                                           seeded_failure.what() +
+                                           "); the template was registered from the scan alone, its shape fitted");
+  }
   const BodyShape& shape = options.known_shape ? *options.known_shape : result.registration.shape;
   result.reference = body.PosedMesh(shape, result.registration.pose);
   const int template_faces = result.reference.num_faces(), scan_faces = scan.num_faces();

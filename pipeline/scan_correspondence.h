@@ -32,8 +32,10 @@ struct ScanCorrespondence {
   int num_manual = 0;               // manual pairs among them
 };
 
-// Registers `body` to `scan` (read from `scan_path`) and places or reads the pairs. Throws
-// InputError naming the scan or a correspondences file, UsageError for a bad option.
+// Registers `body` to `scan` (read from `scan_path`) and places or reads the pairs. When the
+// registration seeded by a known shape or pose fails, it is done again from the scan alone
+// (with a warning in registration.warnings). Throws InputError naming the scan or a
+// correspondences file, UsageError for a bad option.
 ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh& scan, const std::string& scan_path,
                                             const ScanCorrespondenceOptions& options);
 
