@@ -330,23 +330,30 @@ def main():
     os.makedirs(preset_dir, exist_ok=True)
     shutil.rmtree(os.path.join(preset_dir, "worst"), ignore_errors=True)
 
-    start = time.time()
-    results = [run_capture(cap, i + 1, len(caps), args, args.build, preset_dir, synth_help) for i, cap in enumerate(caps)]
-    total = time.time() - start
-
     try:
         commit = subprocess.check_output(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], text=True).strip()
     except (OSError, subprocess.CalledProcessError):
         commit = "unknown"
     contact_sheet = os.path.join(preset_dir, "contact_sheet.md")
-    header = (f"{datetime.datetime.now():%Y-%m-%d %H:%M}, commit {commit}, preset {args.preset} "
-              f"(synth {' '.join(PRESETS[args.preset])}), {len(results)} captures in {total / 60:.1f} min "
-              f"on {os.cpu_count()} cores. Work folder {work}.")
-    write_contact_sheet(contact_sheet, results)
     os.makedirs(os.path.dirname(os.path.abspath(table)), exist_ok=True)
-    write_table(table, results, header, contact_sheet)
-    with open(os.path.join(preset_dir, "suite_results.json"), "w") as f:
-        json.dump(dict(header=header, results=results), f, indent=1)
+
+    def write_outputs(results, total):
+        """The table, contact sheet and JSON so far (rewritten after every capture)."""
+        done = f"{len(results)} captures" if len(results) == len(caps) else f"{len(results)} of {len(caps)} captures so far"
+        header = (f"{datetime.datetime.now():%Y-%m-%d %H:%M}, commit {commit}, preset {args.preset} "
+                  f"(synth {' '.join(PRESETS[args.preset])}), {done} in {total / 60:.1f} min "
+                  f"on {os.cpu_count()} cores. Work folder {work}.")
+        write_contact_sheet(contact_sheet, results)
+        write_table(table, results, header, contact_sheet)
+        with open(os.path.join(preset_dir, "suite_results.json"), "w") as f:
+            json.dump(dict(header=header, results=results), f, indent=1)
+
+    start = time.time()
+    results = []
+    for i, cap in enumerate(caps):
+        results.append(run_capture(cap, i + 1, len(caps), args, args.build, preset_dir, synth_help))
+        write_outputs(results, time.time() - start)
+    total = time.time() - start
     log(f"suite: {len(results)} captures in {total:.0f} s; table {table}; contact sheet {contact_sheet}")
 
     if args.check:
