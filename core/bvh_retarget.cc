@@ -355,8 +355,9 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
       local_child[j].push_back(reference_rotation.transpose() * d);
     }
     // A mapped joint without a mapped child (a head over a neck that leans, as CMU's ASF necks
-    // do) holds its rest orientation in the reference pose, rather than its parent's tilt.
-    reference_world[j] = from.empty() ? Matrix3d::Identity() : BestRotation(from, to);
+    // do; a spine below an unmapped chest) takes the pelvis's orientation in the reference pose
+    // (the body's heading), rather than its parent's tilt.
+    reference_world[j] = from.empty() ? reference_world[0] : BestRotation(from, to);
     align[j] = reference_rotation.transpose() * reference_world[j];
   }
 

@@ -1,8 +1,8 @@
 // The motion suite's BVH clips (../shared/data/bvh/suite/, skipped when absent), performed by the
 // studio actor as `synth --bvh` performs them: each source skeleton (CMU, SFU, Bandai Namco,
 // Perfume, three.js, a Z-up file without a head joint) gives an actor of the right height,
-// upright at the first frame, whose every segment moves and whose pelvis stays in the capture
-// volume.
+// upright at the first frame with the shoulders square to the hips, whose every segment moves
+// and whose pelvis stays in the capture volume.
 
 #include <gtest/gtest.h>
 
@@ -57,6 +57,11 @@ TEST_P(BvhSuiteClip, ActorIsUprightOfItsHeightMovesEverySegmentAndStaysInView) {
   const double height = first[kJointHeadEnd].z() - lowest;
   const Vector3d trunk = (first[kJointNeck] - first[kJointPelvis]).normalized();
   const double lean_deg = std::acos(std::clamp(trunk.z(), -1.0, 1.0)) * 180.0 / M_PI;
+  // The shoulders' left-right axis against the hips' (a torso turned round on its pelvis).
+  const Vector3d shoulders = first[kJointLeftShoulder] - first[kJointRightShoulder];
+  const Vector3d hips = first[kJointLeftHip] - first[kJointRightHip];
+  const double twist_deg =
+      std::acos(std::clamp(shoulders.head<2>().normalized().dot(hips.head<2>().normalized()), -1.0, 1.0)) * 180.0 / M_PI;
 
   // How far each segment turns over the clip (largest angle from its first-frame orientation).
   const std::array<int, kNumBodySegments> segment_joint = StudioSegmentJoints();
@@ -73,14 +78,15 @@ TEST_P(BvhSuiteClip, ActorIsUprightOfItsHeightMovesEverySegmentAndStaysInView) {
   }
   double least_turn = 1e9;
   for (double t : turned) least_turn = std::min(least_turn, t);
-  std::printf("%-34s unit %-4s up %c height %.3f lean %.1f deg least segment turn %.1f deg travel %.2f m, "
-              "placed within %.2f of %.2f m\n", GetParam().file, retarget.unit.c_str(), retarget.up_axis, height,
-              lean_deg, least_turn, placement.travel_m, farthest, volume);
+  std::printf("%-34s unit %-4s up %c height %.3f lean %.1f deg twist %.1f deg least segment turn %.1f deg travel "
+              "%.2f m, placed within %.2f of %.2f m\n", GetParam().file, retarget.unit.c_str(), retarget.up_axis,
+              height, lean_deg, twist_deg, least_turn, placement.travel_m, farthest, volume);
   for (const auto& w : retarget.warnings) std::printf("  warning: %s\n", w.c_str());
   for (const auto& u : retarget.unmapped) std::printf("  unmapped: %s\n", u.c_str());
 
   EXPECT_NEAR(height, actor_options.height_m, 0.15 * actor_options.height_m);
   EXPECT_LT(lean_deg, 30.0);
+  EXPECT_LT(twist_deg, 60.0);
   EXPECT_GT(least_turn, 3.0);
   EXPECT_LE(farthest, volume + 1e-9);
 }
