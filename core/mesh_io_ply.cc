@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -363,9 +364,12 @@ Mesh ReadPly(const std::string& path) {
             const std::size_t count = reader.ReadCount(property);
             for (std::size_t k = 0; k < count; ++k) {
               const double index = reader.Read(property.type);
-              if (!(index >= 0 && index < static_cast<double>(num_vertices)))
-                reader.Fail("face " + std::to_string(f) + " has vertex index " + std::to_string(static_cast<long long>(index)) +
-                            " out of range (" + std::to_string(num_vertices) + " vertices)");
+              if (!(index >= 0 && index < static_cast<double>(num_vertices))) {
+                char shown[32];  // printed from the double: the value may not fit any integer type
+                std::snprintf(shown, sizeof shown, "%.15g", index);
+                reader.Fail("face " + std::to_string(f) + " has vertex index " + shown + " out of range (" +
+                            std::to_string(num_vertices) + " vertices)");
+              }
               polygon.push_back(static_cast<int>(index));
             }
             if (count < 3) reader.Fail("face " + std::to_string(f) + " has fewer than 3 vertices");
