@@ -121,6 +121,8 @@ void VisualHullOptions::Check() const {
   RequireOption(grid_resolution >= 8 && grid_resolution <= 1024, "VisualHullOptions.grid_resolution", grid_resolution,
                 "in [8, 1024]");
   RequireOption(box_half_size_m >= 0, "VisualHullOptions.box_half_size_m", box_half_size_m, ">= 0");
+  RequireOption(tolerated_rejections >= 0 && tolerated_rejections <= 8, "VisualHullOptions.tolerated_rejections",
+                tolerated_rejections, "in [0, 8]");
 }
 
 namespace {
@@ -185,15 +187,17 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
   const Eigen::Vector3d box_lower = geometry.volume_center - Eigen::Vector3d::Constant(half);
   const Eigen::Vector3d box_upper = geometry.volume_center + Eigen::Vector3d::Constant(half);
   Grid coarse = MakeGrid(box_lower, box_upper, 48);
+  const int tolerated = options.tolerated_rejections;
+  const int allowed = tolerated + (leave_one_out ? 1 : 0);  // rejections a voxel of some hull may have
   Eigen::Vector3d lower = Eigen::Vector3d::Constant(1e30), upper = Eigen::Vector3d::Constant(-1e30);
   for (int z = 0; z < coarse.size.z(); ++z)
     for (int y = 0; y < coarse.size.y(); ++y)
       for (int x = 0; x < coarse.size.x(); ++x) {
         const Eigen::Vector3d p = coarse.Center(x, y, z);
         int rejections = 0;
-        for (int c = 0; c < n && rejections < 2; ++c)
+        for (int c = 0; c < n && rejections <= allowed; ++c)
           if (is_source[c] && Rejects(rig.cameras[c], masks[c], p)) ++rejections;
-        if (rejections <= (leave_one_out ? 1 : 0)) {
+        if (rejections <= allowed) {
           lower = lower.cwiseMin(p);
           upper = upper.cwiseMax(p);
         }
@@ -211,28 +215,26 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
   const Eigen::Vector3d margin = Eigen::Vector3d::Constant(3 * coarse.voxel_m);
   Grid grid = MakeGrid(lower - margin, upper + margin, options.grid_resolution);
 
-  // Pass 2: per voxel, how many source cameras reject it, and which one last did.
+  // Pass 2: per voxel, how many source cameras reject it (counted up to allowed + 1).
   std::vector<std::uint8_t> rejections(grid.count(), 0);
-  std::vector<std::int16_t> last_rejecting(grid.count(), -1);
   for (int z = 0; z < grid.size.z(); ++z)
     for (int y = 0; y < grid.size.y(); ++y)
       for (int x = 0; x < grid.size.x(); ++x) {
         const long v = grid.Index(x, y, z);
         const Eigen::Vector3d p = grid.Center(x, y, z);
-        for (int c = 0; c < n && rejections[v] < 2; ++c)
-          if (is_source[c] && Rejects(rig.cameras[c], masks[c], p)) {
-            ++rejections[v];
-            last_rejecting[v] = static_cast<std::int16_t>(c);
-          }
+        for (int c = 0; c < n && rejections[v] <= allowed; ++c)
+          if (is_source[c] && Rejects(rig.cameras[c], masks[c], p)) ++rejections[v];
       }
 
   for (int t : target_list) {
+    const Camera& camera = rig.cameras[t];
     auto inside = [&](int x, int y, int z) {
       if (x < 0 || y < 0 || z < 0 || x >= grid.size.x() || y >= grid.size.y() || z >= grid.size.z()) return false;
       const long v = grid.Index(x, y, z);
-      return rejections[v] == 0 || (leave_one_out && rejections[v] == 1 && last_rejecting[v] == t);
+      if (rejections[v] <= tolerated) return true;
+      // One rejection more is allowed when it is the target's own.
+      return leave_one_out && rejections[v] == tolerated + 1 && Rejects(camera, masks[t], grid.Center(x, y, z));
     };
-    const Camera& camera = rig.cameras[t];
     Image hull(camera.width, camera.height, 1);
     cv::Mat canvas = AsCvMat(hull);
     const double focal = 0.5 * (camera.K(0, 0) + camera.K(1, 1));

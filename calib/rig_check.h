@@ -47,6 +47,9 @@ RigCheckReport CheckRig(const Rig& rig, const RigCheckOptions& options = {});
 struct VisualHullOptions {
   int grid_resolution = 160;     // voxels along the longest side of the carving box
   double box_half_size_m = 0.0;  // half-size of the carving cube; 0 = from the masks' rays
+  // A voxel stays in a target's hull when at most this many of its source cameras reject it
+  // (0: a strict hull; 1 or more: one camera's hole does not carve the others' hull).
+  int tolerated_rejections = 0;
   void Check() const;
 };
 

@@ -23,6 +23,26 @@ std::string RunMaskPath(const RunInputs& inputs, int camera, int frame) {
   return inputs.folder.MaskPath(name, frame);
 }
 
+namespace {
+
+// The masks the tracker will read, checked against each other through the calibration on a
+// sample of frames (silhouette/multiview.h): when they cannot be trusted, the stage's first note
+// says so before tracking starts.
+void WarnUntrustedMasks(const RunInputs& inputs, StageReport* report) {
+  std::vector<int> frames;
+  for (int k : EvenFrameSample(inputs.frames.size(), 12)) frames.push_back(inputs.frames.first + k);
+  const MaskTrust trust = AssessMaskTrust(
+      inputs.capture->rig(), frames,
+      [&](int camera, int frame) {
+        const std::string path = RunMaskPath(inputs, camera, frame);
+        return inputs.cameras.is_used(camera) && fs::exists(path) ? ReadMaskFile(path) : Image();
+      },
+      MultiViewOptions{});
+  if (!trust.warning.empty()) report->notes.insert(report->notes.begin(), "warning: " + trust.warning);
+}
+
+}  // namespace
+
 StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings) {
   StageReport report("silhouettes");
   const double start = NowSeconds();
@@ -33,6 +53,7 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
         throw InputError(RunMaskPath(inputs, c, inputs.frames.first), "mask file not found (given --masks folder)");
     report.skipped = inputs.frames.size();
     report.notes.push_back("masks given: " + inputs.masks_dir);
+    WarnUntrustedMasks(inputs, &report);
     return report;
   }
   // Per camera, the first frame whose mask is missing: a resumed run continues each camera there.
@@ -50,7 +71,10 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
     frames_done = std::min(frames_done, first_missing[c]);
   }
   report.skipped = frames_done - inputs.frames.first;
-  if (frames_done == inputs.frames.end) return report;
+  if (frames_done == inputs.frames.end) {
+    WarnUntrustedMasks(inputs, &report);
+    return report;
+  }
 
   SilhouetteOptions options;
   options.threads = inputs.threads;
@@ -75,6 +99,7 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
   report.computed = inputs.frames.end - frames_done;
   report.seconds = NowSeconds() - start;
   timings->Save();
+  WarnUntrustedMasks(inputs, &report);
   return report;
 }
 

@@ -25,7 +25,12 @@ nlohmann::json SummaryJson(const Capture& capture, const SilhouetteSummary& summ
   json["frames"] = {first, end};
   json["warnings"] = summary.warnings;
   json["num_flagged"] = summary.num_flagged();
-  for (const CameraSilhouetteInfo& info : summary.cameras) {
+  // Multi-view confidence (silhouette/multiview.h): how far the masks can be trusted.
+  json["num_low_confidence"] = summary.trust.low_confidence;
+  json["mean_confidence"] = summary.trust.mean_confidence;
+  json["trusted"] = summary.trust.warning.empty();
+  for (std::size_t index = 0; index < summary.cameras.size(); ++index) {
+    const CameraSilhouetteInfo& info = summary.cameras[index];
     nlohmann::json camera;
     camera["name"] = info.name;
     camera["method"] = SilhouetteMethodName(info.method);
@@ -34,6 +39,8 @@ nlohmann::json SummaryJson(const Capture& capture, const SilhouetteSummary& summ
     camera["threshold_scale"] = info.threshold_scale;
     camera["greenness"] = info.greenness;
     camera["warnings"] = info.warnings;
+    camera["mean_confidence"] =
+        index < summary.trust.camera_confidence.size() ? summary.trust.camera_confidence[index] : 1.0;
     json["cameras"].push_back(camera);
   }
   for (const MaskSummary& mask : summary.masks) {
@@ -44,7 +51,13 @@ nlohmann::json SummaryJson(const Capture& capture, const SilhouetteSummary& summ
                              {"empty", mask.empty},
                              {"full", mask.full},
                              {"touches_border", mask.touches_border},
-                             {"area_jump", mask.area_jump}});
+                             {"area_jump", mask.area_jump},
+                             {"fragmented", mask.fragmented},
+                             {"hull_explained", mask.hull_explained},
+                             {"hull_covered", mask.hull_covered},
+                             {"corrected_pixels", mask.corrected_pixels},
+                             {"confidence", mask.confidence},
+                             {"low_confidence", mask.low_confidence}});
   }
   return json;
 }
@@ -94,6 +107,10 @@ SilhouetteFolderSummary ExtractSilhouettesToFolder(const Capture& capture, const
     if (summary.full) label += " FULL";
     if (summary.touches_border) label += " BORDER";
     if (summary.area_jump) label += " JUMP";
+    if (summary.low_confidence) {
+      std::snprintf(percent, sizeof percent, " LOW %.2f", summary.confidence);
+      label += percent;
+    }
     Image tile = DrawMaskOverlay(image, mask, options.overlay_width, label);
     std::vector<Image> ready;
     {
@@ -118,15 +135,15 @@ SilhouetteFolderSummary ExtractSilhouettesToFolder(const Capture& capture, const
       if (ious[i] >= 0) json["masks"][i]["iou"] = ious[i];
   WriteTextFile((fs::path(out_dir) / "summary.json").string(), json.dump(1));
   char text[256];
-  std::snprintf(text, sizeof text, "%-12s %-8s %10s %6s %6s %6s %6s %10s%s", "camera", "method", "mean fg %", "empty",
-                "full", "border", "jump", "threshold", compared ? "   mean IoU  worst IoU" : "");
+  std::snprintf(text, sizeof text, "%-12s %-8s %10s %6s %6s %6s %6s %10s %6s %5s%s", "camera", "method", "mean fg %",
+                "empty", "full", "border", "jump", "threshold", "conf", "low", compared ? "   mean IoU  worst IoU" : "");
   result.lines.push_back(text);
   const int frames = end - first;
   double all_iou_sum = 0, all_iou_worst = 1;
   int all_iou_count = 0;
   for (int c = 0; c < num_cameras; ++c) {
     double sum = 0;
-    int empty = 0, full = 0, border = 0, jump = 0;
+    int empty = 0, full = 0, border = 0, jump = 0, low = 0;
     for (int f = 0; f < frames; ++f) {
       const MaskSummary& mask = summary.masks[static_cast<std::size_t>(c) * frames + f];
       sum += mask.foreground_fraction;
@@ -134,6 +151,7 @@ SilhouetteFolderSummary ExtractSilhouettesToFolder(const Capture& capture, const
       full += mask.full;
       border += mask.touches_border;
       jump += mask.area_jump;
+      low += mask.low_confidence;
     }
     const CameraSilhouetteInfo& info = summary.cameras[c];
     // Green key: the greenness threshold; background models: the automatic threshold factor.
@@ -141,8 +159,9 @@ SilhouetteFolderSummary ExtractSilhouettesToFolder(const Capture& capture, const
     std::snprintf(threshold, sizeof threshold, info.method == SilhouetteMethod::kGreen ? "g %.3f"
                                                : info.method == SilhouetteMethod::kMog2 ? "-" : "x %.2f",
                   info.method == SilhouetteMethod::kGreen ? info.greenness : info.threshold_scale);
-    std::snprintf(text, sizeof text, "%-12s %-8s %10.2f %6d %6d %6d %6d %10s", info.name.c_str(),
-                  SilhouetteMethodName(info.method), 100.0 * sum / frames, empty, full, border, jump, threshold);
+    std::snprintf(text, sizeof text, "%-12s %-8s %10.2f %6d %6d %6d %6d %10s %6.3f %5d", info.name.c_str(),
+                  SilhouetteMethodName(info.method), 100.0 * sum / frames, empty, full, border, jump, threshold,
+                  summary.trust.camera_confidence.empty() ? 1.0 : summary.trust.camera_confidence[c], low);
     std::string line = text;
     double iou_sum = 0, iou_worst = 1;
     int iou_count = 0;

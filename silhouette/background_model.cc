@@ -150,13 +150,24 @@ BackgroundModel BackgroundModel::FromPlates(const std::vector<Image>& plates, co
 }
 
 BackgroundModel BackgroundModel::FromFrames(const std::vector<Image>& frames, const BackgroundModelOptions& options,
-                                            const std::string& source) {
+                                            const std::string& source, const std::vector<Image>& occupied,
+                                            const Image& estimate) {
   options.Check();
   if (frames.size() < 3) throw InputError(source, "a learned background needs at least 3 frames");
   for (const Image& frame : frames) {
     CheckRgb8(frame, source, "frame");
     if (frame.width != frames[0].width || frame.height != frames[0].height)
       throw InputError(source, "frames differ in size");
+  }
+  if (!occupied.empty() && occupied.size() != frames.size())
+    throw UsageError("BackgroundModel::FromFrames: one occupancy mask per frame is needed");
+  for (const Image& mask : occupied)
+    if (mask.width != frames[0].width || mask.height != frames[0].height || mask.channels != 1)
+      throw InputError(source, "occupancy mask differs in size from the frames");
+  if (!estimate.empty()) {
+    CheckRgb8(estimate, source, "background estimate");
+    if (estimate.width != frames[0].width || estimate.height != frames[0].height)
+      throw InputError(source, "background estimate differs in size from the frames");
   }
   BackgroundModel model;
   model.options_ = options;
@@ -165,11 +176,26 @@ BackgroundModel BackgroundModel::FromFrames(const std::vector<Image>& frames, co
   const std::size_t pixels = static_cast<std::size_t>(model.width_) * model.height_;
   model.mean_.assign(pixels * 3, 0.0f);
   std::vector<float> deviation(pixels, 0.0f);
-  std::vector<int> values(frames.size());
+  std::vector<bool> guessed(pixels, false);  // too few free samples
+  std::vector<int> values;
+  std::vector<std::size_t> free;
   for (std::size_t i = 0; i < pixels; ++i) {
+    free.clear();
+    for (std::size_t k = 0; k < frames.size(); ++k)
+      if (occupied.empty() || occupied[k].data[i] == 0) free.push_back(k);
+    if (free.size() < 2) {
+      guessed[i] = true;
+      if (!estimate.empty()) {
+        for (int c = 0; c < 3; ++c) model.mean_[i * 3 + c] = estimate.data[i * 3 + c];
+        continue;
+      }
+      free.clear();
+      for (std::size_t k = 0; k < frames.size(); ++k) free.push_back(k);
+    }
     float mad_sum = 0;
     for (int c = 0; c < 3; ++c) {
-      for (std::size_t k = 0; k < frames.size(); ++k) values[k] = frames[k].data[i * 3 + c];
+      values.resize(free.size());
+      for (std::size_t k = 0; k < free.size(); ++k) values[k] = frames[free[k]].data[i * 3 + c];
       const int median = Median(&values);
       model.mean_[i * 3 + c] = static_cast<float>(median);
       for (int& value : values) value = std::abs(value - median);
@@ -178,14 +204,16 @@ BackgroundModel BackgroundModel::FromFrames(const std::vector<Image>& frames, co
     // MAD to standard deviation for Gaussian noise; at least half a level of quantisation.
     deviation[i] = std::max(0.5f, 1.4826f * mad_sum / 3.0f);
   }
-  std::vector<float> sorted = deviation;
-  model.noise_sigma_ = Median(&sorted);
+  std::vector<float> sorted;
+  for (std::size_t i = 0; i < pixels; ++i)
+    if (!guessed[i] || occupied.empty()) sorted.push_back(deviation[i]);
+  model.noise_sigma_ = sorted.empty() ? 1.0 : Median(&sorted);
   const std::vector<float> gradient = GradientMagnitude(model.mean_, model.width_, model.height_);
   model.spread_.assign(pixels, 0.0f);
   const float low = static_cast<float>(model.noise_sigma_), high = 2.0f * low;
   for (std::size_t i = 0; i < pixels; ++i) {
     // Pixels that the actor crossed often have an inflated deviation: bound it.
-    const float sigma = std::clamp(deviation[i], low, high);
+    const float sigma = guessed[i] && !occupied.empty() ? high : std::clamp(deviation[i], low, high);
     const float g = static_cast<float>(options.gradient_spread) * gradient[i];
     model.spread_[i] = std::max(static_cast<float>(options.min_spread), std::sqrt(sigma * sigma + g * g));
   }

@@ -61,8 +61,13 @@ class BackgroundModel {
 
   // Learned background: per-pixel temporal median of `frames` (8-bit RGB, same size; at least
   // 3), spread from the per-pixel median absolute deviation. Throws InputError(`source`).
+  // With `occupied` (one 1-channel mask per frame, nonzero where the actor may be), only the
+  // free samples of a pixel count; a pixel free in fewer than 2 frames takes the colour of
+  // `estimate` (8-bit RGB of the frames' size; without it, the median of all samples) and a
+  // doubled spread.
   static BackgroundModel FromFrames(const std::vector<Image>& frames, const BackgroundModelOptions& options,
-                                    const std::string& source = {});
+                                    const std::string& source = {}, const std::vector<Image>& occupied = {},
+                                    const Image& estimate = {});
 
   // Refines mean and spread with the pixels of `frames` that the current model classifies as
   // background (not shadow or highlight), then (if options.auto_thresholds) rescales the

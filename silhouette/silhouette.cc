@@ -47,6 +47,8 @@ void SilhouetteOptions::Check() const {
                 "in (0, 1]");
   RequireOption(border_margin_px >= 0, owner + "border_margin_px", border_margin_px, ">= 0");
   RequireOption(threads >= 1 && threads <= 256, owner + "threads", threads, "in [1, 256]");
+  RequireOption(max_parts >= 1, owner + "max_parts", max_parts, ">= 1");
+  plate_free.Check();
 }
 
 int SilhouetteSummary::num_flagged() const {
@@ -85,6 +87,20 @@ struct SilhouetteExtractor::Mog2 {
   cv::Ptr<cv::BackgroundSubtractorMOG2> subtractor;
 };
 
+SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, BackgroundModel learned,
+                                         std::vector<std::string> warnings, const SilhouetteOptions& options)
+    : options_(options), model_(std::move(learned)) {
+  options.Check();
+  if (model_.empty()) throw UsageError("SilhouetteExtractor: camera " + camera_name + " was given an empty background");
+  info_.name = camera_name;
+  info_.method = SilhouetteMethod::kLearned;
+  info_.warnings = std::move(warnings);
+  width_ = model_.width();
+  height_ = model_.height();
+  info_.noise_sigma = model_.noise_sigma();
+  info_.threshold_scale = model_.threshold_scale();
+}
+
 SilhouetteExtractor::~SilhouetteExtractor() = default;
 SilhouetteExtractor::SilhouetteExtractor(SilhouetteExtractor&&) noexcept = default;
 SilhouetteExtractor& SilhouetteExtractor::operator=(SilhouetteExtractor&&) noexcept = default;
@@ -93,8 +109,10 @@ namespace {
 
 std::string SizeText(int width, int height) { return std::to_string(width) + "x" + std::to_string(height); }
 
+}  // namespace
+
 // Up to `count` frame indices spread evenly over [0, num_frames).
-std::vector<int> EvenSample(int num_frames, int count) {
+std::vector<int> EvenFrameSample(int num_frames, int count) {
   std::vector<int> indices;
   if (num_frames <= count) {
     for (int k = 0; k < num_frames; ++k) indices.push_back(k);
@@ -105,8 +123,6 @@ std::vector<int> EvenSample(int num_frames, int count) {
   indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
   return indices;
 }
-
-}  // namespace
 
 SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const std::string& plate_path,
                                          const FrameReader& read_frame, int num_frames, int first_frame,
@@ -162,7 +178,7 @@ SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const s
   // Frames for learning: spread over the whole video, of the frames' size.
   auto learning_frames = [&]() {
     std::vector<Image> frames;
-    for (int k : EvenSample(num_frames, options.background.learned_frames)) {
+    for (int k : EvenFrameSample(num_frames, options.background.learned_frames)) {
       Image frame = k == first_frame ? first : read_frame(k);
       if (frame.width == width_ && frame.height == height_) frames.push_back(std::move(frame));
     }
@@ -251,71 +267,10 @@ Image SilhouetteExtractor::Extract(const Image& frame, int frame_index, MaskSumm
   MaskSummary local = SummarizeMask(mask, previous_fraction_, options_);
   local.frame = frame_index;
   local.parts = stats.parts_kept;
+  local.fragmented = stats.parts_kept > options_.max_parts;
   previous_fraction_ = local.foreground_fraction;
   if (summary != nullptr) *summary = local;
   return mask;
-}
-
-SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, int end_frame,
-                                     const SilhouetteOptions& options, const MaskSink& sink,
-                                     const ProgressCallback& progress, const std::vector<int>& resume_at) {
-  options.Check();
-  if (first_frame < 0 || end_frame > capture.num_frames() || first_frame >= end_frame)
-    throw UsageError("--frames " + std::to_string(first_frame) + ":" + std::to_string(end_frame) +
-                     " is not a non-empty range within 0:" + std::to_string(capture.num_frames()));
-  const int num_cameras = capture.num_cameras();
-  const int num_frames = end_frame - first_frame;
-  if (!resume_at.empty() && static_cast<int>(resume_at.size()) != num_cameras) std::abort();
-  for (int frame : resume_at)
-    if (frame < first_frame || frame > end_frame) std::abort();
-  auto resume = [&](int c) { return resume_at.empty() ? first_frame : resume_at[c]; };
-  SilhouetteSummary summary;
-  summary.cameras.resize(num_cameras);
-  summary.masks.resize(static_cast<std::size_t>(num_cameras) * num_frames);
-
-  std::atomic<int> next_camera{0};
-  std::atomic<bool> failed{false};
-  std::mutex mutex;  // guards progress reports and the first error
-  std::exception_ptr error;
-  std::size_t done = 0;
-  std::size_t total = 0;
-  for (int c = 0; c < num_cameras; ++c) total += static_cast<std::size_t>(end_frame - resume(c));
-  auto worker = [&]() {
-    try {
-      for (int c = next_camera++; c < num_cameras && !failed; c = next_camera++) {
-        const Camera& camera = capture.rig().cameras[c];
-        SilhouetteExtractor extractor(
-            camera.name, capture.BackgroundPath(c), [&capture, c](int frame) { return capture.ReadFrame(c, frame); },
-            capture.num_frames(), first_frame, options);
-        summary.cameras[c] = extractor.info();
-        if (resume(c) == end_frame) continue;
-        const bool learns = extractor.info().method == SilhouetteMethod::kMog2;  // learns from every frame it sees
-        for (int f = learns ? first_frame : resume(c); f < end_frame && !failed; ++f) {
-          const Image image = capture.ReadFrame(c, f);
-          MaskSummary& mask_summary = summary.masks[static_cast<std::size_t>(c) * num_frames + (f - first_frame)];
-          const Image mask = extractor.Extract(image, f, &mask_summary, capture.FramePath(c, f));
-          mask_summary.camera = c;
-          if (f < resume(c)) continue;
-          if (sink) sink(c, f, image, mask, mask_summary);
-          std::lock_guard<std::mutex> lock(mutex);
-          ReportProgress(progress, "silhouettes", ++done, total, camera.name + " frame " + std::to_string(f));
-        }
-      }
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(mutex);
-      if (!error) error = std::current_exception();
-      failed = true;
-    }
-  };
-  const int threads = std::min(options.threads, num_cameras);
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& thread : pool) thread.join();
-  if (error) std::rethrow_exception(error);
-  for (const CameraSilhouetteInfo& info : summary.cameras)
-    for (const std::string& warning : info.warnings) summary.warnings.push_back(info.name + ": " + warning);
-  return summary;
 }
 
 }  // namespace confluent

@@ -13,6 +13,8 @@
 #include "silhouette/background_model.h"
 #include "silhouette/chroma_key.h"
 #include "silhouette/mask_cleanup.h"
+#include "silhouette/multiview.h"
+#include "silhouette/plate_free.h"
 
 namespace confluent {
 
@@ -43,6 +45,17 @@ struct SilhouetteOptions {
   double area_jump_fraction = 0.35;
   // Mask pixels within this distance of the image edge make the actor "touch the border".
   int border_margin_px = 1;
+  // A mask of more than this many kept parts is fragmented.
+  int max_parts = 3;
+  // Cameras without a plate (learned method) learn their backgrounds together, through the
+  // other cameras' hulls (silhouette/plate_free.h); false: each its own temporal median.
+  bool plate_free_multiview = true;
+  PlateFreeOptions plate_free;
+  // Every frame's masks are checked against the other cameras' hulls (a confidence per
+  // camera-frame); the masks of cameras without a plate are also corrected by it.
+  bool multiview_check = true;
+  bool multiview_correct_learned = true;
+  bool multiview_correct_plates = false;
   // Worker threads for a capture (cameras are processed in parallel).
   int threads = 2;
   // Throws UsageError naming the bad field (also of the nested options).
@@ -59,7 +72,15 @@ struct MaskSummary {
   bool full = false;               // foreground_fraction > full_fraction
   bool touches_border = false;     // the actor reaches the image edge
   bool area_jump = false;          // area changed suddenly since the previous frame
-  bool flagged() const { return empty || full || touches_border || area_jump; }
+  bool fragmented = false;         // more than max_parts parts
+  // Multi-view check (silhouette/multiview.h); 1 when not checked.
+  double hull_explained = 1;  // fraction of the mask near the other cameras' hull
+  double hull_covered = 1;    // fraction of that hull the mask covers
+  // In [0, 1]: the hull consistency, lowered by a quarter for an area jump and for fragmentation.
+  double confidence = 1;
+  bool low_confidence = false;  // confidence < plate_free.multiview.min_confidence
+  int corrected_pixels = 0;     // pixels the multi-view correction added or removed
+  bool flagged() const { return empty || full || touches_border || area_jump || fragmented || low_confidence; }
 };
 
 // How one camera was processed.
@@ -78,6 +99,7 @@ struct SilhouetteSummary {
   std::vector<CameraSilhouetteInfo> cameras;
   std::vector<MaskSummary> masks;      // ordered by camera, then frame
   std::vector<std::string> warnings;   // all cameras' warnings, prefixed by the camera name
+  MaskTrust trust;                     // the multi-view confidences summarised (its warning is in warnings too)
   int num_flagged() const;
 };
 
@@ -100,6 +122,10 @@ class SilhouetteExtractor {
   SilhouetteExtractor(const std::string& camera_name, const std::vector<Image>& plates,
                       const std::string& plate_source, const FrameReader& read_frame, int num_frames,
                       int first_frame, const SilhouetteOptions& options);
+  // A learned background prepared elsewhere (LearnBackgroundsWithoutPlates), with the warnings
+  // for info(); frames must have the model's size.
+  SilhouetteExtractor(const std::string& camera_name, BackgroundModel learned, std::vector<std::string> warnings,
+                      const SilhouetteOptions& options);
   ~SilhouetteExtractor();
   SilhouetteExtractor(SilhouetteExtractor&&) noexcept;
   SilhouetteExtractor& operator=(SilhouetteExtractor&&) noexcept;
@@ -123,6 +149,10 @@ class SilhouetteExtractor {
   double previous_fraction_ = -1;  // < 0 before the first frame
 };
 
+// Up to `count` frame indices spread evenly over [0, num_frames) (the frames a learned
+// background is made from).
+std::vector<int> EvenFrameSample(int num_frames, int count);
+
 // Computes the summary flags of a cleaned mask; `previous_fraction` < 0 means no previous frame.
 MaskSummary SummarizeMask(const Image& mask, double previous_fraction, const SilhouetteOptions& options);
 
@@ -130,13 +160,17 @@ MaskSummary SummarizeMask(const Image& mask, double previous_fraction, const Sil
 using MaskSink = std::function<void(int camera, int frame, const Image& image, const Image& mask,
                                     const MaskSummary& summary)>;
 
-// Extracts silhouettes for frames [first_frame, end_frame) of every camera of `capture`,
-// cameras in parallel (options.threads), reporting progress per camera-frame ("silhouettes").
+// Extracts silhouettes for frames [first_frame, end_frame) of every camera of `capture`, frame
+// after frame with the cameras in parallel (options.threads), reporting progress per
+// camera-frame ("silhouettes"). Cameras without a plate learn their backgrounds together
+// (options.plate_free_multiview); each frame's masks are then checked, and corrected, against
+// the other cameras' hulls before they reach the sink (options.multiview_*).
 // Plates are the capture's background/<cam> images. Throws InputError naming the file for bad
 // plates or frames, UsageError for a bad range or options.
 // `resume_at` (empty, or one frame per camera in [first_frame, end_frame]) resumes a camera
-// there: its earlier frames reach neither the sink nor the progress (a learning method, MOG2,
-// still sees them), while the extractor is prepared at first_frame as in an uninterrupted run.
+// there: its earlier frames reach neither the sink nor the progress (they are still extracted
+// from the earliest resumed frame on, for the multi-view check; MOG2 sees every frame), while the
+// extractor is prepared at first_frame as in an uninterrupted run.
 SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, int end_frame,
                                      const SilhouetteOptions& options, const MaskSink& sink,
                                      const ProgressCallback& progress = {}, const std::vector<int>& resume_at = {});

@@ -1,0 +1,175 @@
+// ExtractSilhouettes (silhouette/silhouette.h): a whole capture, frame after frame, with the
+// backgrounds of cameras without a plate learned together and every frame's masks checked
+// against the other cameras' hulls.
+
+#include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <exception>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "core/error.h"
+#include "silhouette/silhouette.h"
+
+namespace confluent {
+namespace {
+
+// Runs job(i) for i in [0, count) on up to `threads` threads; rethrows the first error.
+void ParallelFor(int count, int threads, const std::function<void(int)>& job) {
+  std::atomic<int> next{0};
+  std::atomic<bool> failed{false};
+  std::mutex mutex;
+  std::exception_ptr error;
+  auto worker = [&]() {
+    try {
+      for (int i = next++; i < count && !failed; i = next++) job(i);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!error) error = std::current_exception();
+      failed = true;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::min(threads, count); ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& thread : pool) thread.join();
+  if (error) std::rethrow_exception(error);
+}
+
+// Replaces the temporal-median extractors of the cameras without a plate by backgrounds learned
+// together (LearnBackgroundsWithoutPlates), when 3 or more cameras can give masks.
+void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& options,
+                            std::vector<std::unique_ptr<SilhouetteExtractor>>* extractors) {
+  const int n = capture.num_cameras();
+  std::vector<BackgroundModel> models(n);
+  int learned = 0, usable = 0;
+  for (int c = 0; c < n; ++c) {
+    const SilhouetteMethod method = (*extractors)[c]->info().method;
+    learned += method == SilhouetteMethod::kLearned;
+    usable += method == SilhouetteMethod::kLearned || method == SilhouetteMethod::kPlate;
+    if (method == SilhouetteMethod::kPlate) models[c] = (*extractors)[c]->model();
+  }
+  if (learned == 0 || usable < 3) return;
+  const std::vector<int> samples = EvenFrameSample(capture.num_frames(), options.background.learned_frames);
+  if (samples.size() < 3) return;  // the extractors already refused or warned
+  std::vector<std::vector<Image>> frames(n);
+  ParallelFor(n, options.threads, [&](int c) {
+    const SilhouetteMethod method = (*extractors)[c]->info().method;
+    if (method != SilhouetteMethod::kLearned && method != SilhouetteMethod::kPlate) return;
+    for (int k : samples) frames[c].push_back(ToRgb8(capture.ReadFrame(c, k)));
+  });
+  std::vector<std::string> notes;
+  models = LearnBackgroundsWithoutPlates(capture.rig(), frames, models, options.background, options.cleanup,
+                                         options.plate_free, &notes);
+  for (int c = 0; c < n; ++c) {
+    if ((*extractors)[c]->info().method != SilhouetteMethod::kLearned) continue;
+    std::vector<std::string> warnings;
+    for (const std::string& warning : (*extractors)[c]->info().warnings)
+      if (warning.rfind("background learned as the temporal median", 0) != 0) warnings.push_back(warning);
+    const std::string prefix = capture.rig().cameras[c].name + ": ";
+    for (const std::string& note : notes)
+      if (note.rfind(prefix, 0) == 0) warnings.push_back(note.substr(prefix.size()));
+    (*extractors)[c] = std::make_unique<SilhouetteExtractor>(capture.rig().cameras[c].name, std::move(models[c]),
+                                                             std::move(warnings), options);
+  }
+}
+
+}  // namespace
+
+SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, int end_frame,
+                                     const SilhouetteOptions& options, const MaskSink& sink,
+                                     const ProgressCallback& progress, const std::vector<int>& resume_at) {
+  options.Check();
+  if (first_frame < 0 || end_frame > capture.num_frames() || first_frame >= end_frame)
+    throw UsageError("--frames " + std::to_string(first_frame) + ":" + std::to_string(end_frame) +
+                     " is not a non-empty range within 0:" + std::to_string(capture.num_frames()));
+  const int num_cameras = capture.num_cameras();
+  const int num_frames = end_frame - first_frame;
+  if (!resume_at.empty() && static_cast<int>(resume_at.size()) != num_cameras) std::abort();
+  for (int frame : resume_at)
+    if (frame < first_frame || frame > end_frame) std::abort();
+  auto resume = [&](int c) { return resume_at.empty() ? first_frame : resume_at[c]; };
+  SilhouetteSummary summary;
+  summary.cameras.resize(num_cameras);
+  summary.masks.resize(static_cast<std::size_t>(num_cameras) * num_frames);
+
+  std::vector<std::unique_ptr<SilhouetteExtractor>> extractors(num_cameras);
+  ParallelFor(num_cameras, options.threads, [&](int c) {
+    extractors[c] = std::make_unique<SilhouetteExtractor>(
+        capture.rig().cameras[c].name, capture.BackgroundPath(c),
+        [&capture, c](int frame) { return capture.ReadFrame(c, frame); }, capture.num_frames(), first_frame, options);
+  });
+  if (options.plate_free_multiview) LearnPlateFreeTogether(capture, options, &extractors);
+  bool mog2 = false;
+  std::vector<bool> correct(num_cameras, false);
+  for (int c = 0; c < num_cameras; ++c) {
+    summary.cameras[c] = extractors[c]->info();
+    const SilhouetteMethod method = extractors[c]->info().method;
+    mog2 = mog2 || method == SilhouetteMethod::kMog2;  // learns from every frame it sees
+    correct[c] = (method == SilhouetteMethod::kLearned && options.multiview_correct_learned) ||
+                 (method == SilhouetteMethod::kPlate && options.multiview_correct_plates);
+  }
+  int start = end_frame;
+  for (int c = 0; c < num_cameras; ++c) start = std::min(start, resume(c));
+  if (mog2) start = first_frame;
+
+  std::mutex mutex;  // guards progress reports
+  std::size_t done = 0, total = 0;
+  for (int c = 0; c < num_cameras; ++c) total += static_cast<std::size_t>(end_frame - resume(c));
+  std::vector<double> previous_fraction(num_cameras, -1.0);  // of the corrected masks
+  const MultiViewOptions& multiview = options.plate_free.multiview;
+  std::vector<std::pair<int, double>> confidences;  // of the camera-frames reaching the sink
+  for (int f = start; f < end_frame; ++f) {
+    std::vector<Image> images(num_cameras), masks(num_cameras);
+    std::vector<MaskSummary> checks(num_cameras);
+    ParallelFor(num_cameras, options.threads, [&](int c) {
+      images[c] = capture.ReadFrame(c, f);
+      masks[c] = extractors[c]->Extract(images[c], f, &checks[c], capture.FramePath(c, f));
+      checks[c].camera = c;
+    });
+    std::vector<ViewConsistency> views;
+    if (options.multiview_check) views = CheckMultiView(capture.rig(), &masks, correct, multiview);
+    for (int c = 0; c < num_cameras; ++c) {
+      MaskSummary& check = checks[c];
+      if (!views.empty()) {
+        const ViewConsistency& view = views[c];
+        if (view.added + view.removed > 0) {
+          MaskSummary again = SummarizeMask(masks[c], previous_fraction[c], options);
+          check.foreground_fraction = again.foreground_fraction;
+          check.empty = again.empty;
+          check.full = again.full;
+          check.touches_border = again.touches_border;
+          check.area_jump = again.area_jump;
+        }
+        check.hull_explained = view.explained;
+        check.hull_covered = view.covered;
+        check.corrected_pixels = view.added + view.removed;
+        check.confidence = view.confidence;
+      }
+      previous_fraction[c] = check.foreground_fraction;
+      if (check.area_jump) check.confidence *= 0.75;
+      if (check.fragmented) check.confidence *= 0.75;
+      if (check.empty) check.confidence = 0;
+      check.low_confidence = check.confidence < multiview.min_confidence;
+      summary.masks[static_cast<std::size_t>(c) * num_frames + (f - first_frame)] = check;
+      if (f >= resume(c)) confidences.emplace_back(c, check.confidence);
+    }
+    ParallelFor(num_cameras, options.threads, [&](int c) {
+      if (f < resume(c)) return;
+      if (sink) sink(c, f, images[c], masks[c], checks[c]);
+      std::lock_guard<std::mutex> lock(mutex);
+      ReportProgress(progress, "silhouettes", ++done, total,
+                     capture.rig().cameras[c].name + " frame " + std::to_string(f));
+    });
+  }
+  for (const CameraSilhouetteInfo& info : summary.cameras)
+    for (const std::string& warning : info.warnings) summary.warnings.push_back(info.name + ": " + warning);
+  summary.trust = SummarizeMaskTrust(capture.rig(), confidences, multiview.min_confidence);
+  if (!summary.trust.warning.empty()) summary.warnings.push_back(summary.trust.warning);
+  return summary;
+}
+
+}  // namespace confluent

@@ -1,0 +1,204 @@
+#include "silhouette/multiview.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+#include "calib/rig_check.h"
+#include "core/cv_interop.h"
+#include "core/error.h"
+
+namespace confluent {
+
+void MultiViewOptions::Check() const {
+  const std::string owner = "MultiViewOptions.";
+  RequireOption(grid_resolution >= 16 && grid_resolution <= 512, owner + "grid_resolution", grid_resolution,
+                "in [16, 512]");
+  RequireOption(tolerated_rejections >= -1 && tolerated_rejections <= 4, owner + "tolerated_rejections",
+                tolerated_rejections, "in [-1, 4]");
+  RequireOption(ghost_margin >= 0 && ghost_margin <= 100, owner + "ghost_margin", ghost_margin, "in [0, 100]");
+  RequireOption(hole_margin >= 0 && hole_margin <= 100, owner + "hole_margin", hole_margin, "in [0, 100]");
+  RequireOption(hole_close >= 0 && hole_close <= 200, owner + "hole_close", hole_close, "in [0, 200]");
+  RequireOption(min_confidence >= 0 && min_confidence <= 1, owner + "min_confidence", min_confidence, "in [0, 1]");
+}
+
+namespace {
+
+cv::Mat Disk(int radius) {
+  return cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
+}
+
+// A margin given per 1000 pixels of width, in pixels of this image (at least 1 when positive).
+int ScaledRadius(double per_1000, int width) {
+  if (per_1000 <= 0) return 0;
+  return std::max(1, static_cast<int>(std::lround(per_1000 * width / 1000.0)));
+}
+
+}  // namespace
+
+std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* masks, const std::vector<bool>& correct,
+                                            const MultiViewOptions& options, std::vector<Image>* hulls) {
+  options.Check();
+  const int n = rig.size();
+  if (static_cast<int>(masks->size()) != n) throw UsageError("CheckMultiView: one mask (or an empty image) per camera");
+  if (!correct.empty() && static_cast<int>(correct.size()) != n)
+    throw UsageError("CheckMultiView: one correction switch per camera");
+  std::vector<ViewConsistency> result(n);
+  if (hulls != nullptr) hulls->assign(n, Image());
+  int with_mask = 0;
+  for (int c = 0; c < n; ++c) {
+    const Image& mask = (*masks)[c];
+    if (mask.empty()) continue;
+    if (mask.width != rig.cameras[c].width || mask.height != rig.cameras[c].height || mask.channels != 1)
+      throw InputError(rig.cameras[c].name, "mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) +
+                                                " but the calibration says " + std::to_string(rig.cameras[c].width) +
+                                                "x" + std::to_string(rig.cameras[c].height));
+    ++with_mask;
+  }
+  if (with_mask < 3) {
+    for (ViewConsistency& view : result) view.explained = view.covered = view.confidence = 1;
+    return result;
+  }
+  // Cameras without a mask constrain nothing: a full mask.
+  std::vector<Image> carving(n);
+  for (int c = 0; c < n; ++c) {
+    carving[c] = (*masks)[c];
+    if (carving[c].empty()) {
+      carving[c] = Image(rig.cameras[c].width, rig.cameras[c].height, 1);
+      std::fill(carving[c].data.begin(), carving[c].data.end(), 255);
+    }
+  }
+  // Ghosts are judged against a tolerant hull (one camera's hole does not carve it), coverage and
+  // holes against the strict one (tighter where the silhouettes have concavities).
+  VisualHullOptions hull_options;
+  hull_options.grid_resolution = options.grid_resolution;
+  std::vector<Image> strict, projected;
+  VisualHullConsistency(rig, carving, {}, hull_options, &strict);
+  hull_options.tolerated_rejections =
+      options.tolerated_rejections >= 0 ? options.tolerated_rejections : (with_mask - 1 >= 6 ? 1 : 0);
+  if (hull_options.tolerated_rejections > 0)
+    VisualHullConsistency(rig, carving, {}, hull_options, &projected);
+  else
+    projected = strict;
+
+  std::vector<double> covered_list;
+  for (int c = 0; c < n; ++c) {
+    Image& mask = (*masks)[c];
+    if (mask.empty()) continue;
+    const int width = mask.width;
+    const cv::Mat hull = AsCvMat(projected[c]);
+    cv::Mat near_hull;
+    const int ghost = ScaledRadius(options.ghost_margin, width);
+    if (ghost > 0) cv::dilate(hull, near_hull, Disk(ghost)); else near_hull = hull;
+    const cv::Mat m = AsCvMat(mask);
+    const double area = cv::countNonZero(m);
+    const cv::Mat tight = AsCvMat(strict[c]);
+    const double hull_area = cv::countNonZero(tight);
+    cv::Mat both;
+    cv::bitwise_and(m, near_hull, both);
+    const double explained_area = cv::countNonZero(both);
+    cv::bitwise_and(m, tight, both);
+    const double covered_area = cv::countNonZero(both);
+    ViewConsistency& view = result[c];
+    view.explained = area > 0 ? explained_area / area : 0.0;
+    view.covered = hull_area > 0 ? covered_area / hull_area : 0.0;
+    covered_list.push_back(view.covered);
+    if (!correct.empty() && correct[c] && cv::countNonZero(hull) > 0) {
+      // Ghosts: the mask where no other camera's hull comes near.
+      cv::Mat corrected;
+      cv::bitwise_and(m, near_hull, corrected);
+      view.removed = static_cast<int>(area - explained_area);
+      // Holes: deep inside the hull and enclosed by the mask (its closing).
+      const int deep = ScaledRadius(options.hole_margin, width), close = ScaledRadius(options.hole_close, width);
+      cv::Mat inner, closed;
+      if (deep > 0) cv::erode(tight, inner, Disk(deep)); else inner = tight;
+      if (close > 0)
+        cv::morphologyEx(corrected, closed, cv::MORPH_CLOSE, Disk(close), cv::Point(-1, -1), 1, cv::BORDER_CONSTANT,
+                         cv::Scalar(0));
+      else
+        closed = corrected;
+      cv::Mat fill;
+      cv::bitwise_and(inner, closed, fill);
+      const double before = cv::countNonZero(corrected);
+      cv::bitwise_or(corrected, fill, corrected);
+      view.added = static_cast<int>(cv::countNonZero(corrected) - before);
+      mask = ImageFromCvMat(corrected);
+    }
+  }
+  // A hull is larger than the silhouette (concavities, few cameras): coverage counts relative to
+  // the frame's typical camera.
+  std::vector<double> sorted = covered_list;
+  double typical = 1;
+  if (!sorted.empty()) {
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    typical = std::max(0.5, sorted[sorted.size() / 2]);
+  }
+  for (int c = 0; c < n; ++c) {
+    if ((*masks)[c].empty()) continue;
+    ViewConsistency& view = result[c];
+    view.confidence = view.explained <= 0 ? 0.0 : std::clamp(std::min(view.explained, view.covered / typical), 0.0, 1.0);
+  }
+  if (hulls != nullptr)
+    for (int c = 0; c < n; ++c)
+      if (!(*masks)[c].empty()) (*hulls)[c] = std::move(projected[c]);
+  return result;
+}
+
+MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<std::pair<int, double>>& confidences,
+                             double min_confidence) {
+  const int n = rig.size();
+  MaskTrust trust;
+  std::vector<double> sum(n, 0.0);
+  std::vector<int> count(n, 0);
+  double total = 0;
+  for (const auto& [camera, confidence] : confidences) {
+    if (camera < 0 || camera >= n) throw UsageError("SummarizeMaskTrust: camera index out of range");
+    ++trust.camera_frames;
+    trust.low_confidence += confidence < min_confidence;
+    sum[camera] += confidence;
+    ++count[camera];
+    total += confidence;
+  }
+  trust.camera_confidence.assign(n, 1.0);
+  std::string worst;
+  double worst_value = 2;
+  for (int c = 0; c < n; ++c) {
+    if (count[c] == 0) continue;
+    trust.camera_confidence[c] = sum[c] / count[c];
+    if (trust.camera_confidence[c] < worst_value) {
+      worst_value = trust.camera_confidence[c];
+      worst = rig.cameras[c].name;
+    }
+  }
+  if (trust.camera_frames == 0) return trust;
+  trust.mean_confidence = total / trust.camera_frames;
+  if (trust.low_confidence * 10 > trust.camera_frames || worst_value < min_confidence) {
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "the silhouettes cannot be trusted: %d of %d camera-frames have a multi-view confidence below %.2f "
+                  "(mean %.2f; worst camera %s, %.2f); tracking would follow these masks: record a clean plate "
+                  "(background/<cam>.png), or give checked masks with --masks",
+                  trust.low_confidence, trust.camera_frames, min_confidence, trust.mean_confidence, worst.c_str(),
+                  worst_value);
+    trust.warning = text;
+  }
+  return trust;
+}
+
+MaskTrust AssessMaskTrust(const Rig& rig, const std::vector<int>& frames,
+                          const std::function<Image(int camera, int frame)>& read_mask, const MultiViewOptions& options) {
+  options.Check();
+  const int n = rig.size();
+  std::vector<std::pair<int, double>> confidences;
+  for (int frame : frames) {
+    std::vector<Image> masks(n);
+    for (int c = 0; c < n; ++c) masks[c] = read_mask(c, frame);
+    const std::vector<ViewConsistency> views = CheckMultiView(rig, &masks, {}, options);
+    for (int c = 0; c < n; ++c)
+      if (!masks[c].empty()) confidences.emplace_back(c, views[c].confidence);
+  }
+  return SummarizeMaskTrust(rig, confidences, options.min_confidence);
+}
+
+}  // namespace confluent

@@ -1,0 +1,77 @@
+#pragma once
+// Multi-view consistency of one frame's masks: each camera's mask against the visual hull of the
+// other cameras (carved through the calibration and projected into it). Gives a confidence per
+// camera, and corrects a mask where the others agree: ghosts outside their hull are removed,
+// holes inside it are filled.
+
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "calib/camera.h"
+#include "core/image.h"
+
+namespace confluent {
+
+// Settings of CheckMultiView.
+struct MultiViewOptions {
+  // Voxels along the longest side of the box around the hull.
+  int grid_resolution = 128;
+  // Other cameras that may reject a voxel of a camera's hull (a hole in one camera does not
+  // carve the others' hull); -1 = automatic: 1 with 6 or more other cameras, else 0.
+  int tolerated_rejections = -1;
+  // Ghosts: mask pixels farther than this from the others' hull are removed. Pixels per 1000
+  // pixels of image width (scaled with the image).
+  double ghost_margin = 8.0;
+  // Holes: pixels at least this deep inside the others' hull, and within the closing radius of
+  // the mask, are filled (per 1000 pixels of width, as above).
+  double hole_margin = 6.0;
+  double hole_close = 40.0;
+  // A camera-frame whose confidence is below this is flagged.
+  double min_confidence = 0.8;
+  // Throws UsageError naming the bad field.
+  void Check() const;
+};
+
+// One camera's mask against the others' hull.
+struct ViewConsistency {
+  double explained = 0;   // fraction of the mask near the others' hull (1 = no ghosts)
+  double covered = 0;     // fraction of the others' strict hull covered by the mask (a hull is larger than the silhouette)
+  double confidence = 0;  // min(explained, covered / the frame's median covered), in [0, 1]; 0 for an empty mask
+  int added = 0;          // pixels filled by the correction
+  int removed = 0;        // pixels removed by the correction
+};
+
+// Checks each camera's mask of one frame (`masks[i]`: 1-channel 0/255 of rig camera i, or empty
+// for a camera without a mask: it neither constrains nor is checked) against the hull of the
+// others, and corrects the masks of the cameras with `correct[i]` (empty: none). Needs 3 or more
+// cameras with masks; with fewer every confidence is 1 and nothing changes. `hulls`, if given,
+// receives each camera's projected hull of the others (empty for cameras without a mask).
+// Throws InputError naming the camera whose mask differs in size from its calibration.
+std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* masks, const std::vector<bool>& correct,
+                                            const MultiViewOptions& options, std::vector<Image>* hulls = nullptr);
+
+// How far a set of masks can be trusted, from a sample of frames.
+struct MaskTrust {
+  int camera_frames = 0;                 // checked
+  int low_confidence = 0;                // of them below options.min_confidence
+  double mean_confidence = 1;
+  std::vector<double> camera_confidence;  // mean per camera (rig order; 1 for cameras not checked)
+  // "" when the masks look fine, else one line with the numbers and what to do.
+  std::string warning;
+};
+
+// Summarises confidences given as (camera index, confidence) per camera-frame: the counts, the
+// means, and the warning (set when more than a tenth of the camera-frames, or any camera on
+// average, falls below `min_confidence`).
+MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<std::pair<int, double>>& confidences,
+                             double min_confidence);
+
+// Reads the masks of `frames` through `read_mask(camera, frame)` (an empty image: no mask for
+// that camera) and summarises CheckMultiView's confidence without correcting anything
+// (SummarizeMaskTrust with options.min_confidence).
+MaskTrust AssessMaskTrust(const Rig& rig, const std::vector<int>& frames,
+                          const std::function<Image(int camera, int frame)>& read_mask, const MultiViewOptions& options);
+
+}  // namespace confluent

@@ -1,0 +1,46 @@
+#pragma once
+// Backgrounds learned from the video itself when there is no clean plate, for every camera of a
+// calibrated rig together: per-pixel statistics over the frames where the pixel is free, the
+// occupancy coming from the masks and from the visual hull of the other cameras, iterated.
+// Robust to an actor who stays in place: where the temporal median holds the actor, the first
+// estimate is the surrounding background filled in (inpainted) and the samples nearest to it.
+
+#include <string>
+#include <vector>
+
+#include "calib/camera.h"
+#include "core/image.h"
+#include "silhouette/background_model.h"
+#include "silhouette/mask_cleanup.h"
+#include "silhouette/multiview.h"
+
+namespace confluent {
+
+// Settings of LearnBackgroundsWithoutPlates.
+struct PlateFreeOptions {
+  // Rounds of masks -> multi-view correction -> occupancy -> background.
+  int iterations = 2;
+  // Occupancy is the corrected mask and the others' hull, grown by this margin (per 1000 pixels
+  // of image width).
+  double occupancy_margin = 10.0;
+  // A pixel the actor may cover (its samples differ from the median) takes the samples within
+  // this many noise sigmas (plus a tenth of the colour's brightness) of the nearest sample to the
+  // inpainted background.
+  double nearest_tolerance = 6.0;
+  MultiViewOptions multiview;
+  // Throws UsageError naming the bad field.
+  void Check() const;
+};
+
+// `frames[c]` are the sampled frames of camera c (8-bit RGB, the same instants for every
+// camera, at least 3). `models[c]` holds a model already known (a plate) that is kept, or an
+// empty model for a camera to learn; cameras with an empty `frames[c]` are left out. Returns
+// the models; `notes` receives one line per camera learned.
+std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const std::vector<std::vector<Image>>& frames,
+                                                           std::vector<BackgroundModel> models,
+                                                           const BackgroundModelOptions& background,
+                                                           const MaskCleanupOptions& cleanup,
+                                                           const PlateFreeOptions& options,
+                                                           std::vector<std::string>* notes = nullptr);
+
+}  // namespace confluent
