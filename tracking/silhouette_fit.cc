@@ -33,6 +33,7 @@ void SilhouetteFitOptions::Check() const {
   RequireOption(image_to_model_weight >= 0, owner + "image_to_model_weight", image_to_model_weight, ">= 0");
   RequireOption(prior_weight >= 0, owner + "prior_weight", prior_weight, ">= 0");
   RequireOption(shape_prior_weight >= 0, owner + "shape_prior_weight", shape_prior_weight, ">= 0");
+  RequireOption(shape_proportion_weight >= 0, owner + "shape_proportion_weight", shape_proportion_weight, ">= 0");
   RequireOption(skirt_prior_weight >= 0, owner + "skirt_prior_weight", skirt_prior_weight, ">= 0");
   RequireOption(num_threads >= 1, owner + "num_threads", num_threads, ">= 1");
 }
@@ -409,6 +410,15 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
       b(i) = shape_prior[i];
     }
     problem.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, fp->shape);
+    if (options.shape_proportion_weight > 0) {
+      // w (s_g - mean of the same kind): lengths and girths separately.
+      constexpr int n = ti::kNumShapeGroups;
+      Eigen::MatrixXd P = Eigen::MatrixXd::Zero(kShapeBlockSize, kShapeBlockSize);
+      for (int half = 0; half < 2; ++half)
+        P.block(half * n, half * n, n, n) =
+            options.shape_proportion_weight * (Eigen::MatrixXd::Identity(n, n) - Eigen::MatrixXd::Constant(n, n, 1.0 / n));
+      problem.AddResidualBlock(new ceres::NormalPrior(P, Eigen::VectorXd::Zero(kShapeBlockSize)), nullptr, fp->shape);
+    }
     for (int i = 0; i < kShapeBlockSize; ++i) {
       problem.SetParameterLowerBound(fp->shape, i, 0.6 * shape_prior[i]);
       problem.SetParameterUpperBound(fp->shape, i, 1.6 * shape_prior[i]);

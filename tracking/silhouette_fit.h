@@ -34,7 +34,12 @@ struct SilhouetteFitOptions {
   double image_to_model_loss_px = 3.0;  // Cauchy scale of the image -> model residuals (reduced px)
   double image_to_model_weight = 1.5;   // relative weight of the image -> model term
   double prior_weight = 2.0;       // weight (per radian) of the prior towards the initial joint angles
-  double shape_prior_weight = 20.0;     // weight of the prior towards equal (uniform) scales
+  double shape_prior_weight = 20.0;     // weight of the prior towards the start's mean scale (uniform body)
+  // Weight of the prior towards equal proportions: each group's scale towards the mean of the
+  // current lengths (or girths), whatever the overall size. With a weak shape_prior_weight the
+  // body may grow or shrink as a whole (a crouched first frame under-estimates the height)
+  // while keeping human proportions.
+  double shape_proportion_weight = 0.0;
   bool fit_skirt = true;           // with fit_shape: also optimise BodyShape's skirt length and flare
   double skirt_prior_weight = 2.0; // weight (per metre) of the prior towards no skirt
   int num_threads = 2;

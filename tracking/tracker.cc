@@ -124,6 +124,10 @@ void TrackerOptions::Check() const {
   RequireOption(limb_search_drop >= 0 && limb_search_drop < 1, owner + "limb_search_drop", limb_search_drop,
                 "in [0, 1)");
   RequireOption(limb_fits >= 1 && limb_fits <= 16, owner + "limb_fits", limb_fits, "in [1, 16]");
+  RequireOption(limb_fits_init >= 1 && limb_fits_init <= 16, owner + "limb_fits_init", limb_fits_init, "in [1, 16]");
+  RequireOption(init_shape_prior_weight >= 0, owner + "init_shape_prior_weight", init_shape_prior_weight, ">= 0");
+  RequireOption(init_shape_proportion_weight >= 0, owner + "init_shape_proportion_weight",
+                init_shape_proportion_weight, ">= 0");
   RequireOption(limb_min_gain >= 0 && limb_min_gain < 1, owner + "limb_min_gain", limb_min_gain, "in [0, 1)");
 }
 
@@ -155,7 +159,7 @@ std::vector<bool> Tracker::UsableCameras(const std::vector<Image>& masks, std::v
 }
 
 void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
-                          const SilhouetteObservations& observations, TrackedFrame* result) {
+                          const SilhouetteObservations& observations, int fits, TrackedFrame* result) {
   SilhouetteFitOptions fit = options_.fit;
   fit.prior_weight = 0.2;  // towards the hypothesis itself
   fit.coarse_to_fine = false;
@@ -167,7 +171,7 @@ void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<boo
       Evaluate(shape_, masks, use, &candidate);
       scored.push_back(std::move(candidate));
     }
-    const int keep = std::min<int>(options_.limb_fits, static_cast<int>(scored.size()));
+    const int keep = std::min<int>(fits, static_cast<int>(scored.size()));
     std::partial_sort(scored.begin(), scored.begin() + keep, scored.end(),
                       [](const TrackedFrame& a, const TrackedFrame& b) { return a.mean_iou > b.mean_iou; });
     for (int k = 0; k < keep; ++k) {
@@ -253,6 +257,8 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   shape_options.rounds = options_.init_rounds;
   shape_options.max_iterations = 25;
   shape_options.prior_weight = 0.2;
+  shape_options.shape_prior_weight = options_.init_shape_prior_weight;
+  shape_options.shape_proportion_weight = options_.init_shape_proportion_weight;
   SilhouetteFitOptions refine = options_.fit;
   refine.prior_weight = 0.2;
   refine.rounds = 2;
@@ -289,7 +295,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
       shape_ = shape;
     }
   }
-  if (options_.limb_search) SearchLimbs(masks, use, observations, &result);
+  if (options_.limb_search) SearchLimbs(masks, use, observations, options_.limb_fits_init, &result);
   result.flags.push_back("initialized");
   initialized_ = true;
   history_.push_back(result.pose);
@@ -375,7 +381,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   const std::vector<double> window(iou_history_.end() - std::min<std::size_t>(iou_history_.size(), kIouWindow),
                                    iou_history_.end());
   if (options_.limb_search && result.mean_iou < Median(window) - options_.limb_search_drop)
-    SearchLimbs(masks, use, observations, &result);
+    SearchLimbs(masks, use, observations, options_.limb_fits, &result);
   history_.push_back(result.pose);
   if (history_.size() > 4) history_.erase(history_.begin());
   iou_history_.push_back(result.mean_iou);

@@ -34,6 +34,11 @@ HullPlacement EstimatePlacementFromHull(const Rig& rig, const std::vector<Image>
 struct TrackerOptions {
   SilhouetteFitOptions fit;        // per-frame fit
   int init_rounds = 3;             // contour rounds of the initial shape-and-pose fit
+  // Shape priors of the initial fit (SilhouetteFitOptions): a weak pull towards the hull's
+  // height (a crouched first frame under-estimates it) and a strong one towards human
+  // proportions.
+  double init_shape_prior_weight = 2.0;
+  double init_shape_proportion_weight = 40.0;
   bool try_skirt = true;           // initial shape fit also from a long skirt (BodyShape::skirt_*) ...
   double skirt_try_below_iou = 0.92; // ... when the fit without one has a mean IoU below this (1: always) ...
   double skirt_min_iou_gain = 0.01; // ... kept when its mean IoU beats the fit without by this much
@@ -49,6 +54,7 @@ struct TrackerOptions {
   bool limb_search = true;
   double limb_search_drop = 0.02;
   int limb_fits = 2;
+  int limb_fits_init = 4;          // at initialisation (once per run), more of them are fitted
   double limb_min_gain = 0.005;
   // Throws UsageError for out-of-range values.
   void Check() const;
@@ -99,7 +105,7 @@ class Tracker {
   // Re-places each limb of `result` (fitted to `observations`) where it overlaps the masks
   // better, flagging "limb:<name>" for each limb moved.
   void SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
-                   const SilhouetteObservations& observations, TrackedFrame* result);
+                   const SilhouetteObservations& observations, int fits, TrackedFrame* result);
 
   Rig rig_;
   std::vector<bool> excluded_;

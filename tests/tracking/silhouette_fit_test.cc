@@ -29,6 +29,26 @@ TemplatePose TruePose() {
   return pose;
 }
 
+// The template's own silhouettes in `pose`, one per camera.
+std::vector<Image> TemplateMasks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose,
+                                 const Rig& rig) {
+  const Mesh mesh = body.PosedMesh(shape, pose);
+  std::vector<Image> masks;
+  for (const Camera& camera : rig.cameras) masks.push_back(RasterizeClosedMesh(mesh, camera));
+  return masks;
+}
+
+// A thorough shape-and-pose fit at full mask resolution.
+SilhouetteFitOptions FullResolutionShapeFit() {
+  SilhouetteFitOptions options;
+  options.downscale = 1;
+  options.max_contour_points = 400;
+  options.rounds = 3;
+  options.max_iterations = 25;
+  options.fit_shape = true;
+  return options;
+}
+
 double MeanJointError(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& a, const TemplatePose& b) {
   const auto ja = body.JointPositions(shape, a), jb = body.JointPositions(shape, b);
   double sum = 0;
@@ -119,15 +139,8 @@ TEST(SilhouetteFit, RecoversKnownGirthsWithoutShrinking) {
   for (double& g : truth_shape.girth_scale) g *= 1.12;
   const Rig rig = testing::CameraRing(8, 320, 240);
   const TemplatePose truth = TruePose();
-  const Mesh mesh = body.PosedMesh(truth_shape, truth);
-  std::vector<Image> masks;
-  for (const Camera& camera : rig.cameras) masks.push_back(RasterizeClosedMesh(mesh, camera));  // centre-sampled
-  SilhouetteFitOptions options;
-  options.downscale = 1;
-  options.max_contour_points = 400;
-  options.rounds = 3;
-  options.max_iterations = 25;
-  options.fit_shape = true;
+  const std::vector<Image> masks = TemplateMasks(body, truth_shape, truth, rig);  // centre-sampled
+  SilhouetteFitOptions options = FullResolutionShapeFit();
   options.shape_prior_weight = 1.0;
   const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
   BodyShape shape = start_shape;
@@ -146,6 +159,56 @@ TEST(SilhouetteFit, RecoversKnownGirthsWithoutShrinking) {
     EXPECT_GT(MaskIoU(rendered, masks[c]), 0.92) << c;
     EXPECT_GT(static_cast<double>(CountForeground(rendered)) / CountForeground(masks[c]), 0.96) << c;
   }
+}
+
+// A first frame in a deep crouch (issue 19: Indian dance starts in a plie): the visual hull is
+// lower than the performer, so the initial shape starts too small. With the tracker's initial
+// shape priors (a weak pull towards that size, a strong one towards human proportions) the fit
+// finds the body's size and proportions; with a strong pull towards the start it cannot.
+TEST(SilhouetteFit, CrouchedFirstFrameFindsTheBodysSizeAndProportions) {
+  const BodyTemplate body;
+  const BodyShape truth_shape = BodyShape::Uniform(1.75);  // every scale 1
+  TemplatePose crouch;
+  crouch.root_rotation = Eigen::Vector3d(0, 0, 0.4);
+  crouch.dofs[kJointChest] = {0.3, 0.0, 0.0};
+  crouch.dofs[kJointLeftHip] = {0.9, 0.25, 0.3};
+  crouch.dofs[kJointRightHip] = {0.9, -0.25, -0.3};
+  crouch.dofs[kJointLeftKnee] = {-1.4, 0, 0};
+  crouch.dofs[kJointRightKnee] = {-1.4, 0, 0};
+  crouch.dofs[kJointLeftAnkle] = {0.5, 0, 0};
+  crouch.dofs[kJointRightAnkle] = {0.5, 0, 0};
+  crouch.dofs[kJointLeftShoulder] = {0.0, 0.9, 0.0};
+  crouch.dofs[kJointRightShoulder] = {0.0, -0.9, 0.0};
+  const Rig rig = testing::CameraRing(8, 320, 240);
+  const std::vector<Image> masks = TemplateMasks(body, truth_shape, crouch, rig);
+  const TrackerOptions tracker;
+  SilhouetteFitOptions options = FullResolutionShapeFit();
+  options.fit_skirt = false;
+  options.prior_weight = 0.2;
+  const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
+  auto fit = [&](double prior_weight, double proportion_weight) {
+    SilhouetteFitOptions o = options;
+    o.shape_prior_weight = prior_weight;
+    o.shape_proportion_weight = proportion_weight;
+    BodyShape shape = BodyShape::Uniform(1.5);  // what a crouched hull's height suggests
+    TemplatePose pose = crouch;
+    FitTemplateToSilhouettes(body, observations, o, &shape, &pose);
+    return shape;
+  };
+  const BodyShape fitted = fit(tracker.init_shape_prior_weight, tracker.init_shape_proportion_weight);
+  const BodyShape pulled = fit(20.0, 0.0);  // the per-frame default: held near the start
+  auto mean_length = [](const BodyShape& s) {
+    double sum = 0;
+    for (double l : s.length_scale) sum += l;
+    return sum / s.length_scale.size();
+  };
+  EXPECT_NEAR(mean_length(fitted), 1.0, 0.05);
+  EXPECT_LT(mean_length(pulled), 0.95);
+  // Shank and foot are left out: in a deep crouch their lengths trade against the knee and
+  // ankle angles (they come out 10-25% short here).
+  for (BodySegment s : {BodySegment::kUpperTorso, BodySegment::kLowerTorso, BodySegment::kLeftThigh,
+                        BodySegment::kLeftUpperArm, BodySegment::kLeftForearm, BodySegment::kNeck})
+    EXPECT_NEAR(fitted.length_scale[int(s)], 1.0, 0.05) << BodySegmentName(int(s));
 }
 
 }  // namespace
