@@ -131,7 +131,18 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
       checks[c].camera = c;
     });
     std::vector<ViewConsistency> views;
-    if (options.multiview_check) views = CheckMultiView(capture.rig(), &masks, correct, multiview);
+    std::vector<Image> hulls;
+    if (options.multiview_check) views = CheckMultiView(capture.rig(), &masks, correct, multiview, &hulls);
+    if (options.grabcut_learned && !views.empty())
+      ParallelFor(num_cameras, options.threads, [&](int c) {
+        if (!correct[c] || extractors[c]->info().method != SilhouetteMethod::kLearned) return;
+        const Image refined = CleanMask(RefineMaskGrabCut(ToRgb8(images[c]), masks[c], hulls[c], options.grabcut),
+                                        options.cleanup);
+        std::size_t changed = 0;
+        for (std::size_t i = 0; i < refined.data.size(); ++i) changed += refined.data[i] != masks[c].data[i];
+        views[c].added += static_cast<int>(changed);  // counted as corrected pixels
+        masks[c] = refined;
+      });
     for (int c = 0; c < num_cameras; ++c) {
       MaskSummary& check = checks[c];
       if (!views.empty()) {

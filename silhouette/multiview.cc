@@ -60,27 +60,48 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
     for (ViewConsistency& view : result) view.explained = view.covered = view.confidence = 1;
     return result;
   }
-  // Cameras without a mask constrain nothing: a full mask.
+  // Cameras without a mask, or with an empty one (the actor is in every camera's view), constrain
+  // nothing: a full mask.
   std::vector<Image> carving(n);
   for (int c = 0; c < n; ++c) {
     carving[c] = (*masks)[c];
-    if (carving[c].empty()) {
+    if (carving[c].empty() || cv::countNonZero(AsCvMat(carving[c])) == 0) {
       carving[c] = Image(rig.cameras[c].width, rig.cameras[c].height, 1);
       std::fill(carving[c].data.begin(), carving[c].data.end(), 255);
     }
   }
-  // Ghosts are judged against a tolerant hull (one camera's hole does not carve it), coverage and
-  // holes against the strict one (tighter where the silhouettes have concavities).
+  // Ghosts are judged against a tolerant hull (one camera's hole does not carve it); coverage and
+  // holes against a strict one (tighter where the silhouettes have concavities) carved by the
+  // cameras whose masks that hull explains (a shifted mask would carve it away).
   VisualHullOptions hull_options;
   hull_options.grid_resolution = options.grid_resolution;
-  std::vector<Image> strict, projected;
-  VisualHullConsistency(rig, carving, {}, hull_options, &strict);
   hull_options.tolerated_rejections =
-      options.tolerated_rejections >= 0 ? options.tolerated_rejections : (with_mask - 1 >= 6 ? 1 : 0);
-  if (hull_options.tolerated_rejections > 0)
-    VisualHullConsistency(rig, carving, {}, hull_options, &projected);
-  else
-    projected = strict;
+      options.tolerated_rejections >= 0 ? options.tolerated_rejections : (with_mask - 1 >= 4 ? 1 : 0);
+  std::vector<Image> projected, strict;
+  VisualHullConsistency(rig, carving, {}, hull_options, &projected);
+  std::vector<cv::Mat> near_hulls(n);
+  std::vector<Image> strict_carving = carving;
+  bool excluded = false;
+  for (int c = 0; c < n; ++c) {
+    if ((*masks)[c].empty()) continue;
+    const cv::Mat hull = AsCvMat(projected[c]);
+    const int radius = ScaledRadius(options.ghost_margin, (*masks)[c].width);
+    if (radius > 0) cv::dilate(hull, near_hulls[c], Disk(radius)); else near_hulls[c] = hull;
+    const cv::Mat m = AsCvMat((*masks)[c]);
+    cv::Mat both;
+    cv::bitwise_and(m, near_hulls[c], both);
+    const double area = cv::countNonZero(m);
+    if (area > 0 && cv::countNonZero(both) < 0.9 * area) {
+      std::fill(strict_carving[c].data.begin(), strict_carving[c].data.end(), 255);
+      excluded = true;
+    }
+  }
+  if (hull_options.tolerated_rejections > 0 || excluded) {
+    hull_options.tolerated_rejections = 0;
+    VisualHullConsistency(rig, strict_carving, {}, hull_options, &strict);
+  } else {
+    strict = projected;
+  }
 
   std::vector<double> covered_list;
   for (int c = 0; c < n; ++c) {
@@ -88,9 +109,7 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
     if (mask.empty()) continue;
     const int width = mask.width;
     const cv::Mat hull = AsCvMat(projected[c]);
-    cv::Mat near_hull;
-    const int ghost = ScaledRadius(options.ghost_margin, width);
-    if (ghost > 0) cv::dilate(hull, near_hull, Disk(ghost)); else near_hull = hull;
+    const cv::Mat& near_hull = near_hulls[c];
     const cv::Mat m = AsCvMat(mask);
     const double area = cv::countNonZero(m);
     const cv::Mat tight = AsCvMat(strict[c]);
@@ -102,7 +121,8 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
     const double covered_area = cv::countNonZero(both);
     ViewConsistency& view = result[c];
     view.explained = area > 0 ? explained_area / area : 0.0;
-    view.covered = hull_area > 0 ? covered_area / hull_area : 0.0;
+    // An empty strict hull (some camera sees nothing) leaves nothing to cover.
+    view.covered = hull_area > 0 ? covered_area / hull_area : 1.0;
     covered_list.push_back(view.covered);
     if (!correct.empty() && correct[c] && cv::countNonZero(hull) > 0) {
       // Ghosts: the mask where no other camera's hull comes near.

@@ -19,7 +19,7 @@ struct MultiViewOptions {
   // Voxels along the longest side of the box around the hull.
   int grid_resolution = 128;
   // Other cameras that may reject a voxel of a camera's hull (a hole in one camera does not
-  // carve the others' hull); -1 = automatic: 1 with 6 or more other cameras, else 0.
+  // carve the others' hull); -1 = automatic: 1 with 4 or more other cameras, else 0.
   int tolerated_rejections = -1;
   // Ghosts: mask pixels farther than this from the others' hull are removed. Pixels per 1000
   // pixels of image width (scaled with the image).

@@ -74,7 +74,7 @@ BackgroundModel FirstEstimate(const std::vector<Image>& frames, const Background
       nearest = std::min(nearest, distance[k]);
     }
     const double brightness = std::sqrt(double(e[0]) * e[0] + double(e[1]) * e[1] + double(e[2]) * e[2]);
-    const double limit = nearest + plate_free.nearest_tolerance * sigma + 0.1 * brightness;
+    const double limit = nearest + plate_free.nearest_tolerance * sigma + 0.04 * brightness;
     for (std::size_t k = 0; k < frames.size(); ++k)
       if (distance[k] > limit) occupied[k].data[i] = 255;
   }

@@ -24,9 +24,9 @@ struct PlateFreeOptions {
   // of image width).
   double occupancy_margin = 10.0;
   // A pixel the actor may cover (its samples differ from the median) takes the samples within
-  // this many noise sigmas (plus a tenth of the colour's brightness) of the nearest sample to the
+  // this many noise sigmas (plus 4% of the colour's brightness) of the nearest sample to the
   // inpainted background.
-  double nearest_tolerance = 6.0;
+  double nearest_tolerance = 4.0;
   MultiViewOptions multiview;
   // Throws UsageError naming the bad field.
   void Check() const;

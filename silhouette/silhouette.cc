@@ -49,6 +49,7 @@ void SilhouetteOptions::Check() const {
   RequireOption(threads >= 1 && threads <= 256, owner + "threads", threads, "in [1, 256]");
   RequireOption(max_parts >= 1, owner + "max_parts", max_parts, ">= 1");
   plate_free.Check();
+  grabcut.Check();
 }
 
 int SilhouetteSummary::num_flagged() const {

@@ -12,6 +12,7 @@
 #include "core/progress.h"
 #include "silhouette/background_model.h"
 #include "silhouette/chroma_key.h"
+#include "silhouette/grabcut_refine.h"
 #include "silhouette/mask_cleanup.h"
 #include "silhouette/multiview.h"
 #include "silhouette/plate_free.h"
@@ -56,6 +57,10 @@ struct SilhouetteOptions {
   bool multiview_check = true;
   bool multiview_correct_learned = true;
   bool multiview_correct_plates = false;
+  // The corrected masks of cameras without a plate are then refined by a graph cut on colour
+  // models of the actor and its surroundings (silhouette/grabcut_refine.h).
+  bool grabcut_learned = true;
+  GrabCutRefineOptions grabcut;
   // Worker threads for a capture (cameras are processed in parallel).
   int threads = 2;
   // Throws UsageError naming the bad field (also of the nested options).

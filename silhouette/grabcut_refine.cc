@@ -1,0 +1,65 @@
+#include "silhouette/grabcut_refine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "core/cv_interop.h"
+#include "core/error.h"
+
+namespace confluent {
+
+void GrabCutRefineOptions::Check() const {
+  const std::string owner = "GrabCutRefineOptions.";
+  RequireOption(iterations >= 1 && iterations <= 10, owner + "iterations", iterations, "in [1, 10]");
+  RequireOption(band > 0 && band <= 200, owner + "band", band, "in (0, 200]");
+  RequireOption(core >= 0 && core <= 200, owner + "core", core, "in [0, 200]");
+}
+
+namespace {
+
+cv::Mat Disk(double per_1000, int width) {
+  const int radius = std::max(1, static_cast<int>(std::lround(per_1000 * width / 1000.0)));
+  return cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
+}
+
+}  // namespace
+
+Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull, const GrabCutRefineOptions& options) {
+  options.Check();
+  const cv::Mat m = AsCvMat(mask);
+  if (cv::countNonZero(m) == 0) return mask;
+  cv::Mat region = m.clone();
+  if (!hull.empty()) cv::bitwise_or(region, AsCvMat(hull), region);
+  cv::Mat near;
+  cv::dilate(region, near, Disk(options.band, mask.width));
+  cv::Mat core = m.clone();
+  if (!hull.empty()) cv::bitwise_and(core, AsCvMat(hull), core);
+  if (options.core > 0) cv::erode(core, core, Disk(options.core, mask.width));
+  // Work inside the band's bounding box (with a margin of certain background).
+  cv::Rect box = cv::boundingRect(near);
+  const int margin = 4;
+  box = cv::Rect(box.x - margin, box.y - margin, box.width + 2 * margin, box.height + 2 * margin) &
+        cv::Rect(0, 0, mask.width, mask.height);
+  cv::Mat labels(box.size(), CV_8U, cv::Scalar(cv::GC_BGD));
+  for (int y = 0; y < box.height; ++y)
+    for (int x = 0; x < box.width; ++x) {
+      const int gx = x + box.x, gy = y + box.y;
+      std::uint8_t& label = labels.at<std::uint8_t>(y, x);
+      if (core.at<std::uint8_t>(gy, gx)) label = cv::GC_FGD;
+      else if (m.at<std::uint8_t>(gy, gx)) label = cv::GC_PR_FGD;
+      else if (near.at<std::uint8_t>(gy, gx)) label = cv::GC_PR_BGD;
+    }
+  if (cv::countNonZero(labels == cv::GC_BGD) == 0 || cv::countNonZero((labels & 1) != 0) == 0) return mask;
+  cv::Mat bgr;
+  cv::cvtColor(AsCvMat(frame)(box), bgr, cv::COLOR_RGB2BGR);
+  cv::Mat background_model, foreground_model;
+  cv::grabCut(bgr, labels, cv::Rect(), background_model, foreground_model, options.iterations, cv::GC_INIT_WITH_MASK);
+  Image refined(mask.width, mask.height, 1);
+  cv::Mat out = AsCvMat(refined);
+  cv::Mat foreground = (labels == cv::GC_FGD) | (labels == cv::GC_PR_FGD);
+  foreground.copyTo(out(box));
+  return refined;
+}
+
+}  // namespace confluent

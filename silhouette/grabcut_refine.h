@@ -1,0 +1,26 @@
+#pragma once
+// Boundary refinement of a mask by a graph cut on colour models of the actor and of its
+// surroundings (OpenCV's grabCut, Rother et al. 2004), seeded by the mask and the other
+// cameras' hull: removes background-coloured rims (ghosts of where the actor was) and fills
+// actor-coloured gaps.
+
+#include "core/image.h"
+
+namespace confluent {
+
+struct GrabCutRefineOptions {
+  int iterations = 2;
+  // Pixels farther than this from both the mask and the hull are certain background; mask pixels
+  // this deep inside both the mask and the hull are certain foreground (per 1000 pixels of width).
+  double band = 30.0;
+  double core = 25.0;
+  // Throws UsageError naming the bad field.
+  void Check() const;
+};
+
+// Refines `mask` (1-channel 0/255) of the 8-bit RGB `frame`; `hull` (the others' projected hull,
+// same size, or empty) widens the uncertain band and must contain the certain foreground.
+// Returns the mask unchanged when it is empty.
+Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull, const GrabCutRefineOptions& options);
+
+}  // namespace confluent

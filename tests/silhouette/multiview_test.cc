@@ -1,0 +1,159 @@
+// Multi-view consistency and the plate-free background against constructed ground truth: a ring
+// of calibrated cameras around an actor of ellipsoids whose exact masks are known.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+
+#include "silhouette/multiview.h"
+#include "silhouette/plate_free.h"
+#include "tests/silhouette/multiview_scene.h"
+#include "tests/silhouette/synthetic_scene.h"
+
+namespace confluent {
+namespace {
+
+using testing::Iou;
+
+// `mask` moved right by `dx` pixels.
+Image Shifted(const Image& mask, int dx) {
+  Image out(mask.width, mask.height, 1);
+  for (int y = 0; y < mask.height; ++y)
+    for (int x = 0; x < mask.width; ++x)
+      if (x - dx >= 0 && x - dx < mask.width) out.at<std::uint8_t>(x, y) = mask.at<std::uint8_t>(x - dx, y);
+  return out;
+}
+
+void Fill(Image* mask, int x0, int y0, int x1, int y1, std::uint8_t value) {
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) mask->at<std::uint8_t>(x, y) = value;
+}
+
+TEST(MultiView, ConsistentMasksAreConfidentShiftedOrEmptyOnesAreNot) {
+  const Rig rig = testing::MakeRingRig(8, 160, 120);
+  const auto actor = testing::MakeActor(0.0, 0.0, 0.6);
+  std::vector<Image> masks;
+  for (const Camera& camera : rig.cameras) masks.push_back(testing::RenderMask(camera, actor));
+  std::vector<Image> good = masks;
+  const std::vector<ViewConsistency> views = CheckMultiView(rig, &good, {}, MultiViewOptions{});
+  for (int c = 0; c < rig.size(); ++c) {
+    EXPECT_GE(views[c].confidence, 0.9) << rig.cameras[c].name;
+    EXPECT_GE(views[c].explained, 0.98) << rig.cameras[c].name;
+    EXPECT_EQ(views[c].added + views[c].removed, 0);
+    EXPECT_EQ(Iou(good[c], masks[c]), 1.0);  // nothing corrected unless asked
+  }
+  std::vector<Image> bad = masks;
+  bad[2] = Shifted(masks[2], 25);
+  bad[5] = Image(160, 120, 1);
+  const std::vector<ViewConsistency> checked = CheckMultiView(rig, &bad, {}, MultiViewOptions{});
+  EXPECT_LT(checked[2].confidence, 0.6);
+  EXPECT_EQ(checked[5].confidence, 0.0);
+  for (int c : {0, 1, 3, 4, 6, 7}) EXPECT_GE(checked[c].confidence, 0.85) << rig.cameras[c].name;
+}
+
+TEST(MultiView, CorrectionRemovesAGhostAndFillsAHoleWhereTheOthersAgree) {
+  const Rig rig = testing::MakeRingRig(8, 160, 120);
+  const auto actor = testing::MakeActor(0.0, 0.0, 0.3);
+  std::vector<Image> truth;
+  for (const Camera& camera : rig.cameras) truth.push_back(testing::RenderMask(camera, actor));
+  std::vector<Image> masks = truth;
+  // cam3: a ghost far from the actor and a hole in the torso.
+  Fill(&masks[3], 5, 60, 25, 100, 255);
+  const Eigen::Vector2d torso = rig.cameras[3].Project(Eigen::Vector3d(0, 0, 1.2));
+  const int tx = static_cast<int>(torso.x()), ty = static_cast<int>(torso.y());
+  Fill(&masks[3], tx - 5, ty - 6, tx + 5, ty + 6, 0);
+  const double before = Iou(masks[3], truth[3]);
+  std::vector<bool> correct(8, false);
+  correct[3] = true;
+  const std::vector<ViewConsistency> views = CheckMultiView(rig, &masks, correct, MultiViewOptions{});
+  const double after = Iou(masks[3], truth[3]);
+  EXPECT_LT(before, 0.8);
+  EXPECT_GE(after, 0.97) << "before " << before;
+  EXPECT_GT(views[3].removed, 700);  // the 20x40 ghost
+  EXPECT_GT(views[3].added, 80);     // most of the 10x12 hole
+  EXPECT_EQ(masks[3].at<std::uint8_t>(15, 80), 0);
+  EXPECT_EQ(masks[3].at<std::uint8_t>(tx, ty), 255);
+  for (int c : {0, 1, 2, 4, 5, 6, 7}) EXPECT_EQ(Iou(masks[c], truth[c]), 1.0);  // not asked to correct
+}
+
+TEST(MultiView, TrustAssessmentWarnsAboutAShiftedCameraOnly) {
+  const Rig rig = testing::MakeRingRig(6, 160, 120);
+  auto read = [&](bool shift_cam1) {
+    return [&rig, shift_cam1](int camera, int frame) {
+      const Image mask = testing::RenderMask(rig.cameras[camera], testing::MakeActor(0.1 * frame, 0.0, 0.2 * frame));
+      return shift_cam1 && camera == 1 ? Shifted(mask, 30) : mask;
+    };
+  };
+  const MaskTrust good = AssessMaskTrust(rig, {0, 2, 4}, read(false), MultiViewOptions{});
+  EXPECT_EQ(good.camera_frames, 18);
+  EXPECT_EQ(good.low_confidence, 0);
+  EXPECT_TRUE(good.warning.empty()) << good.warning;
+  const MaskTrust bad = AssessMaskTrust(rig, {0, 2, 4}, read(true), MultiViewOptions{});
+  EXPECT_EQ(bad.low_confidence, 3);
+  EXPECT_LT(bad.camera_confidence[1], 0.6);
+  EXPECT_NE(bad.warning.find("worst camera cam1"), std::string::npos) << bad.warning;
+  EXPECT_NE(bad.warning.find("--masks"), std::string::npos) << bad.warning;
+}
+
+// Frames of an actor who stands still for the first half (the temporal median holds them), then
+// walks away waving: per camera a textured background with sensor noise.
+struct PlateFreeScene {
+  Rig rig = testing::MakeRingRig(8, 160, 120);
+  std::vector<std::vector<Image>> frames, truth;
+  explicit PlateFreeScene(int count) {
+    frames.resize(rig.size());
+    truth.resize(rig.size());
+    for (int c = 0; c < rig.size(); ++c) {
+      const Image plate = testing::MakeTexturedPlate(160, 120, 11 + c);
+      for (int k = 0; k < count; ++k) {
+        const double walked = k < count / 2 ? 0.0 : 0.06 * (k - count / 2);
+        const auto actor = testing::MakeActor(walked, 0.5 * walked, k < count / 2 ? 0.0 : 0.1 * (k % 10));
+        Image frame = testing::RenderFrame(rig.cameras[c], actor, plate);
+        testing::AddNoise(&frame, 2.0, 100 * c + k);
+        frames[c].push_back(frame);
+        truth[c].push_back(testing::RenderMask(rig.cameras[c], actor));
+      }
+    }
+  }
+  // Mean and worst IoU of the models' cleaned masks (multi-view corrected when asked).
+  std::pair<double, double> Score(const std::vector<BackgroundModel>& models, bool correct) const {
+    double sum = 0, worst = 1;
+    int count = 0;
+    for (std::size_t k = 0; k < frames[0].size(); ++k) {
+      std::vector<Image> masks;
+      for (int c = 0; c < rig.size(); ++c) masks.push_back(CleanMask(models[c].Classify(frames[c][k]), {}));
+      if (correct) CheckMultiView(rig, &masks, std::vector<bool>(rig.size(), true), MultiViewOptions{});
+      for (int c = 0; c < rig.size(); ++c) {
+        const double iou = Iou(masks[c], truth[c][k]);
+        sum += iou;
+        worst = std::min(worst, iou);
+        ++count;
+      }
+    }
+    return {sum / count, worst};
+  }
+};
+
+TEST(PlateFree, ActorStandingStillForHalfTheVideoIsFoundWithoutAPlate) {
+  const PlateFreeScene scene(24);
+  std::vector<BackgroundModel> median;
+  for (int c = 0; c < scene.rig.size(); ++c) {
+    median.push_back(BackgroundModel::FromFrames(scene.frames[c], {}, "median"));
+    median.back().AutoThreshold(scene.frames[c]);
+  }
+  const auto [median_mean, median_worst] = scene.Score(median, false);
+  std::vector<std::string> notes;
+  const std::vector<BackgroundModel> learned = LearnBackgroundsWithoutPlates(
+      scene.rig, scene.frames, std::vector<BackgroundModel>(scene.rig.size()), {}, {}, PlateFreeOptions{}, &notes);
+  const auto [mean, worst] = scene.Score(learned, true);
+  std::printf("temporal median: IoU mean %.3f worst %.3f; plate-free multi-view: mean %.3f worst %.3f\n", median_mean,
+              median_worst, mean, worst);
+  EXPECT_EQ(notes.size(), 8u);
+  EXPECT_LT(median_mean, 0.8);  // the scene is hard for the median: the actor stands in it
+  EXPECT_GE(mean, 0.93);
+  EXPECT_GE(worst, 0.8);
+}
+
+}  // namespace
+}  // namespace confluent
