@@ -15,6 +15,8 @@ void PlateFreeOptions::Check() const {
   RequireOption(iterations >= 0 && iterations <= 10, owner + "iterations", iterations, "in [0, 10]");
   RequireOption(occupancy_margin >= 0 && occupancy_margin <= 200, owner + "occupancy_margin", occupancy_margin,
                 "in [0, 200]");
+  RequireOption(background_colour > 0.5 && background_colour <= 1, owner + "background_colour", background_colour,
+                "in (0.5, 1]");
   RequireOption(nearest_tolerance > 0 && nearest_tolerance <= 100, owner + "nearest_tolerance", nearest_tolerance,
                 "in (0, 100]");
   multiview.Check();
@@ -81,6 +83,37 @@ BackgroundModel FirstEstimate(const std::vector<Image>& frames, const Background
   return Learn(frames, occupied, *estimate, options, name);
 }
 
+// Colour histograms of the actor and of the background seen by one camera: how
+// background-like a colour is (16 levels per channel).
+class ColourPrior {
+ public:
+  // Adds the pixels of `frame` (8-bit RGB) where `actor` or `background` (1-channel) is set.
+  void Add(const Image& frame, const cv::Mat& actor, const cv::Mat& background) {
+    const std::size_t pixels = static_cast<std::size_t>(frame.width) * frame.height;
+    for (std::size_t i = 0; i < pixels; i += 2) {
+      if (actor.data[i]) {
+        actor_[Bin(&frame.data[i * 3])] += 1;
+        actor_total_ += 1;
+      } else if (background.data[i]) {
+        background_[Bin(&frame.data[i * 3])] += 1;
+        background_total_ += 1;
+      }
+    }
+  }
+  // P(background | colour) with equal priors; 0.5 for a colour seen in neither.
+  double BackgroundProbability(const std::uint8_t* rgb) const {
+    if (actor_total_ <= 0 || background_total_ <= 0) return 0.5;
+    const int bin = Bin(rgb);
+    const double b = background_[bin] / background_total_ + 1e-5, a = actor_[bin] / actor_total_ + 1e-5;
+    return b / (a + b);
+  }
+
+ private:
+  static int Bin(const std::uint8_t* rgb) { return (rgb[0] >> 4) * 256 + (rgb[1] >> 4) * 16 + (rgb[2] >> 4); }
+  std::vector<double> actor_ = std::vector<double>(4096, 0.0), background_ = std::vector<double>(4096, 0.0);
+  double actor_total_ = 0, background_total_ = 0;
+};
+
 }  // namespace
 
 std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const std::vector<std::vector<Image>>& frames,
@@ -112,6 +145,7 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
   }
   for (int round = 0; round < options.iterations; ++round) {
     std::vector<std::vector<Image>> occupied(n);
+    std::vector<ColourPrior> priors(n);
     std::vector<double> added(n, 0), removed(n, 0);
     for (std::size_t k = 0; k < samples; ++k) {
       std::vector<Image> masks(n);
@@ -124,12 +158,30 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
         cv::Mat occupancy = AsCvMat(masks[c]).clone();
         if (!hulls[c].empty()) cv::bitwise_or(occupancy, AsCvMat(hulls[c]), occupancy);
         occupied[c].push_back(ImageFromCvMat(Grow(occupancy, options.occupancy_margin)));
+        // Colour samples: the actor where the mask and the hull agree (eroded), the background
+        // well away from both.
+        cv::Mat actor = AsCvMat(masks[c]).clone(), far;
+        if (!hulls[c].empty()) cv::bitwise_and(actor, AsCvMat(hulls[c]), actor);
+        cv::erode(actor, actor, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
+        cv::bitwise_not(Grow(occupancy, 3 * options.occupancy_margin), far);
+        priors[c].Add(frames[c][k], actor, far);
         added[c] += views[c].added;
         removed[c] += views[c].removed;
       }
     }
-    for (int c = 0; c < n; ++c)
-      if (learn[c]) models[c] = Learn(frames[c], occupied[c], estimate[c], background, rig.cameras[c].name);
+    for (int c = 0; c < n; ++c) {
+      if (!learn[c]) continue;
+      // Lock-in breaker: where a ghost keeps the true background out of the free samples, a
+      // clearly background-coloured sample counts as free, a clearly actor-coloured one never.
+      const std::size_t pixels = static_cast<std::size_t>(frames[c][0].width) * frames[c][0].height;
+      for (std::size_t k = 0; k < samples; ++k)
+        for (std::size_t i = 0; i < pixels; ++i) {
+          const double p = priors[c].BackgroundProbability(&frames[c][k].data[i * 3]);
+          if (p >= options.background_colour) occupied[c][k].data[i] = 0;
+          else if (p <= 1.0 - options.background_colour) occupied[c][k].data[i] = 255;
+        }
+      models[c] = Learn(frames[c], occupied[c], estimate[c], background, rig.cameras[c].name);
+    }
   }
   if (notes != nullptr)
     for (int c = 0; c < n; ++c)

@@ -27,6 +27,10 @@ struct PlateFreeOptions {
   // this many noise sigmas (plus 4% of the colour's brightness) of the nearest sample to the
   // inpainted background.
   double nearest_tolerance = 4.0;
+  // From the second estimate on, colour histograms of the actor and of the background decide
+  // too: a sample whose colour is background with at least this probability is free even under
+  // the occupancy (a ghost's true background), one that is the actor's with it never is.
+  double background_colour = 0.9;
   MultiViewOptions multiview;
   // Throws UsageError naming the bad field.
   void Check() const;
