@@ -131,12 +131,13 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
       checks[c].camera = c;
     });
     std::vector<ViewConsistency> views;
-    std::vector<Image> hulls;
-    if (options.multiview_check) views = CheckMultiView(capture.rig(), &masks, correct, multiview, &hulls);
+    std::vector<Image> hulls, strict_hulls;
+    if (options.multiview_check)
+      views = CheckMultiView(capture.rig(), &masks, correct, multiview, &hulls, &strict_hulls);
     if (options.grabcut_learned && !views.empty())
       ParallelFor(num_cameras, options.threads, [&](int c) {
         if (!correct[c] || extractors[c]->info().method != SilhouetteMethod::kLearned) return;
-        const Image refined = CleanMask(RefineMaskGrabCut(ToRgb8(images[c]), masks[c], hulls[c], options.grabcut),
+        const Image refined = CleanMask(RefineMaskGrabCut(ToRgb8(images[c]), masks[c], strict_hulls[c], options.grabcut),
                                         options.cleanup);
         std::size_t changed = 0;
         for (std::size_t i = 0; i < refined.data.size(); ++i) changed += refined.data[i] != masks[c].data[i];

@@ -38,7 +38,8 @@ int ScaledRadius(double per_1000, int width) {
 }  // namespace
 
 std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* masks, const std::vector<bool>& correct,
-                                            const MultiViewOptions& options, std::vector<Image>* hulls) {
+                                            const MultiViewOptions& options, std::vector<Image>* hulls,
+                                            std::vector<Image>* strict_hulls) {
   options.Check();
   const int n = rig.size();
   if (static_cast<int>(masks->size()) != n) throw UsageError("CheckMultiView: one mask (or an empty image) per camera");
@@ -46,6 +47,7 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
     throw UsageError("CheckMultiView: one correction switch per camera");
   std::vector<ViewConsistency> result(n);
   if (hulls != nullptr) hulls->assign(n, Image());
+  if (strict_hulls != nullptr) strict_hulls->assign(n, Image());
   int with_mask = 0;
   for (int c = 0; c < n; ++c) {
     const Image& mask = (*masks)[c];
@@ -159,9 +161,11 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
     ViewConsistency& view = result[c];
     view.confidence = view.explained <= 0 ? 0.0 : std::clamp(std::min(view.explained, view.covered / typical), 0.0, 1.0);
   }
-  if (hulls != nullptr)
-    for (int c = 0; c < n; ++c)
-      if (!(*masks)[c].empty()) (*hulls)[c] = std::move(projected[c]);
+  for (int c = 0; c < n; ++c) {
+    if ((*masks)[c].empty()) continue;
+    if (strict_hulls != nullptr) (*strict_hulls)[c] = strict[c];
+    if (hulls != nullptr) (*hulls)[c] = std::move(projected[c]);
+  }
   return result;
 }
 

@@ -47,10 +47,12 @@ struct ViewConsistency {
 // for a camera without a mask: it neither constrains nor is checked) against the hull of the
 // others, and corrects the masks of the cameras with `correct[i]` (empty: none). Needs 3 or more
 // cameras with masks; with fewer every confidence is 1 and nothing changes. `hulls`, if given,
-// receives each camera's projected hull of the others (empty for cameras without a mask).
+// receives each camera's projected tolerant hull of the others (empty for cameras without a
+// mask), `strict_hulls` the strict one.
 // Throws InputError naming the camera whose mask differs in size from its calibration.
 std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* masks, const std::vector<bool>& correct,
-                                            const MultiViewOptions& options, std::vector<Image>* hulls = nullptr);
+                                            const MultiViewOptions& options, std::vector<Image>* hulls = nullptr,
+                                            std::vector<Image>* strict_hulls = nullptr);
 
 // How far a set of masks can be trusted, from a sample of frames.
 struct MaskTrust {
