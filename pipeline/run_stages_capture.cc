@@ -78,6 +78,7 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
 
   SilhouetteOptions options;
   options.threads = inputs.threads;
+  options.multiview_exclude = inputs.cameras.held_out_mask();  // held-out images must not shape the used masks
   std::mutex mutex;
   std::map<int, int> cameras_done;
   for (int frame = frames_done; frame < inputs.frames.end; ++frame)

@@ -46,7 +46,9 @@ void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& opt
   const int n = capture.num_cameras();
   std::vector<BackgroundModel> models(n);
   int learned = 0, usable = 0;
+  auto excluded = [&](int c) { return !options.multiview_exclude.empty() && options.multiview_exclude[c]; };
   for (int c = 0; c < n; ++c) {
+    if (excluded(c)) continue;
     const SilhouetteMethod method = (*extractors)[c]->info().method;
     learned += method == SilhouetteMethod::kLearned;
     usable += method == SilhouetteMethod::kLearned || method == SilhouetteMethod::kPlate;
@@ -58,14 +60,14 @@ void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& opt
   std::vector<std::vector<Image>> frames(n);
   ParallelFor(n, options.threads, [&](int c) {
     const SilhouetteMethod method = (*extractors)[c]->info().method;
-    if (method != SilhouetteMethod::kLearned && method != SilhouetteMethod::kPlate) return;
+    if (excluded(c) || (method != SilhouetteMethod::kLearned && method != SilhouetteMethod::kPlate)) return;
     for (int k : samples) frames[c].push_back(ToRgb8(capture.ReadFrame(c, k)));
   });
   std::vector<std::string> notes;
   models = LearnBackgroundsWithoutPlates(capture.rig(), frames, models, options.background, options.cleanup,
                                          options.plate_free, &notes);
   for (int c = 0; c < n; ++c) {
-    if ((*extractors)[c]->info().method != SilhouetteMethod::kLearned) continue;
+    if (excluded(c) || (*extractors)[c]->info().method != SilhouetteMethod::kLearned) continue;
     std::vector<std::string> warnings;
     for (const std::string& warning : (*extractors)[c]->info().warnings)
       if (warning.rfind("background learned as the temporal median", 0) != 0) warnings.push_back(warning);
@@ -89,6 +91,10 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
   const int num_cameras = capture.num_cameras();
   const int num_frames = end_frame - first_frame;
   if (!resume_at.empty() && static_cast<int>(resume_at.size()) != num_cameras) std::abort();
+  if (!options.multiview_exclude.empty() && static_cast<int>(options.multiview_exclude.size()) != num_cameras)
+    throw UsageError("SilhouetteOptions.multiview_exclude: one flag per camera of the capture (" +
+                     std::to_string(num_cameras) + "), got " + std::to_string(options.multiview_exclude.size()));
+  auto excluded = [&](int c) { return !options.multiview_exclude.empty() && options.multiview_exclude[c]; };
   for (int frame : resume_at)
     if (frame < first_frame || frame > end_frame) std::abort();
   auto resume = [&](int c) { return resume_at.empty() ? first_frame : resume_at[c]; };
@@ -109,8 +115,8 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
     summary.cameras[c] = extractors[c]->info();
     const SilhouetteMethod method = extractors[c]->info().method;
     mog2 = mog2 || method == SilhouetteMethod::kMog2;  // learns from every frame it sees
-    correct[c] = (method == SilhouetteMethod::kLearned && options.multiview_correct_learned) ||
-                 (method == SilhouetteMethod::kPlate && options.multiview_correct_plates);
+    correct[c] = !excluded(c) && ((method == SilhouetteMethod::kLearned && options.multiview_correct_learned) ||
+                                  (method == SilhouetteMethod::kPlate && options.multiview_correct_plates));
   }
   int start = end_frame;
   for (int c = 0; c < num_cameras; ++c) start = std::min(start, resume(c));
@@ -132,8 +138,18 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
     });
     std::vector<ViewConsistency> views;
     std::vector<Image> hulls, strict_hulls;
-    if (options.multiview_check)
-      views = CheckMultiView(capture.rig(), &masks, correct, multiview, &hulls, &strict_hulls);
+    if (options.multiview_check) {
+      std::vector<Image> checked(num_cameras);  // excluded cameras: no mask
+      for (int c = 0; c < num_cameras; ++c)
+        if (!excluded(c)) checked[c] = std::move(masks[c]);
+      views = CheckMultiView(capture.rig(), &checked, correct, multiview, &hulls, &strict_hulls);
+      for (int c = 0; c < num_cameras; ++c) {
+        if (excluded(c)) continue;
+        masks[c] = std::move(checked[c]);
+      }
+      for (int c = 0; c < num_cameras; ++c)
+        if (excluded(c)) views[c] = ViewConsistency{1, 1, 1, 0, 0};
+    }
     if (options.grabcut_learned && !views.empty())
       ParallelFor(num_cameras, options.threads, [&](int c) {
         if (!correct[c] || extractors[c]->info().method != SilhouetteMethod::kLearned) return;

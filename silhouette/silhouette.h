@@ -57,6 +57,10 @@ struct SilhouetteOptions {
   bool multiview_check = true;
   bool multiview_correct_learned = true;
   bool multiview_correct_plates = false;
+  // Cameras kept out of both (empty, or one flag per camera): held-out cameras, whose images
+  // must not shape the masks of the cameras that are evaluated against them. They keep their
+  // own background (temporal median without a plate) and are not checked (confidence 1).
+  std::vector<bool> multiview_exclude;
   // The corrected masks of cameras without a plate are then refined by a graph cut on colour
   // models of the actor and its surroundings (silhouette/grabcut_refine.h).
   bool grabcut_learned = true;
