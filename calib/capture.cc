@@ -1,6 +1,7 @@
 #include "calib/capture.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <mutex>
@@ -92,6 +93,26 @@ void CheckSize(const std::string& path, int width, int height, const Camera& cam
   }
 }
 
+// Checks an image's size against `camera`. A difference of up to `fit_padding_px` rows and
+// columns is sensor or encoder padding at the bottom and right: the camera takes the image's
+// size (K unchanged: the principal point stays where it is in pixels) and `warnings` says so.
+void CheckSize(const std::string& path, int width, int height, Camera* camera, int fit_padding_px,
+               std::vector<std::string>* warnings) {
+  if ((width != camera->width || height != camera->height) && std::abs(width - camera->width) <= fit_padding_px &&
+      std::abs(height - camera->height) <= fit_padding_px && width > 0 && height > 0) {
+    std::ostringstream message;
+    message << "camera " << camera->name << ": images are " << width << "x" << height << " (" << path
+            << ") but the calibration says " << camera->width << "x" << camera->height
+            << ": taken as sensor padding at the bottom and right, the principal point kept at (" << camera->K(0, 2)
+            << ", " << camera->K(1, 2) << "); if the padding is at the top or left, correct K_" << camera->name
+            << " in intri.yml";
+    warnings->push_back(message.str());
+    camera->width = width;
+    camera->height = height;
+  }
+  CheckSize(path, width, height, *camera);
+}
+
 // Lists cameras whose frame counts differ: "cam0: 10, cam1: 9".
 std::string CountsList(const Rig& rig, const std::vector<int>& counts) {
   std::ostringstream list;
@@ -136,7 +157,8 @@ Capture Capture::Open(const std::string& root_path, const CaptureOptions& option
         throw InputError((videos / rig.cameras[c].name).string() + ".mp4",
                          "missing: camera " + rig.cameras[c].name + " is calibrated but has no video");
       VideoReader reader(path);
-      CheckSize(path, reader.width(), reader.height(), rig.cameras[c]);
+      CheckSize(path, reader.width(), reader.height(), &capture.rig_.cameras[c], options.fit_padding_px,
+                &capture.warnings_);
       counts[c] = reader.num_frames();
       if (c == 0 && reader.fps() > 0 && reader.fps() <= 1000) capture.frame_rate_ = reader.fps();
       capture.video_paths_.push_back(path);
@@ -157,7 +179,9 @@ Capture Capture::Open(const std::string& root_path, const CaptureOptions& option
       for (std::size_t f = 0; f < paths.size(); ++f) {
         if (!options.check_every_image_header && f != 0 && f + 1 != paths.size()) continue;
         const ImageInfo info = ReadImageInfo(paths[f]);
-        CheckSize(paths[f], info.width, info.height, rig.cameras[c]);
+        // Padding is fitted on a camera's first frame only: its other frames must all match it.
+        CheckSize(paths[f], info.width, info.height, &capture.rig_.cameras[c], f == 0 ? options.fit_padding_px : 0,
+                  &capture.warnings_);
       }
     }
   }

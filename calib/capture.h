@@ -19,6 +19,11 @@ struct CaptureOptions {
   bool decode_every_frame = false;
   // Called once per decoded camera-frame when decode_every_frame is set.
   ProgressCallback progress;
+  // Images up to this many rows or columns smaller or larger than the calibration says are
+  // taken as sensor or encoder padding at the bottom and right (a Qualisys file giving the
+  // sensor's 1088 rows for videos of 1080): the camera takes the images' size, its principal
+  // point is kept, and warnings() says so. 0: any difference is an error.
+  int fit_padding_px = 16;
 };
 
 enum class FrameSource { kImages, kVideos };
@@ -28,7 +33,8 @@ class Capture {
  public:
   // Opens and validates `root`: intri.yml/extri.yml readable and consistent; camera names in
   // the calibration and images/ (or videos/) agree; every camera has the same frame count with
-  // no gaps; image sizes match the calibration; videos decode. Throws InputError naming the
+  // no gaps; image sizes match the calibration (up to options.fit_padding_px of padding,
+  // fitted with a warning); videos decode. Throws InputError naming the
   // file or folder and the problem (unequal counts list every camera and its count).
   static Capture Open(const std::string& root, const CaptureOptions& options = {});
 
@@ -55,6 +61,9 @@ class Capture {
   // Mask as 1-channel 8-bit, 0 or 255 (thresholded at 128). Throws InputError naming the file.
   Image ReadMask(int camera, int frame) const;
 
+  // What Open adjusted (sensor padding fitted), one line per camera, to show the user.
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
   // Clean plate background/<cam>.png|jpg, or "" when absent.
   std::string BackgroundPath(int camera) const;
   // Optional scan.ply|obj and correspondences.json, or "" when absent.
@@ -74,6 +83,7 @@ class Capture {
   bool has_masks_ = false;
   std::string scan_path_;
   std::string correspondences_path_;
+  std::vector<std::string> warnings_;
   std::unique_ptr<VideoCache> videos_;
 };
 

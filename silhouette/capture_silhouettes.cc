@@ -193,6 +193,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
                      capture.rig().cameras[c].name + " frame " + std::to_string(f));
     });
   }
+  summary.warnings = capture.warnings();  // what opening the capture adjusted (sensor padding)
   for (const CameraSilhouetteInfo& info : summary.cameras)
     for (const std::string& warning : info.warnings) summary.warnings.push_back(info.name + ": " + warning);
   summary.trust = SummarizeMaskTrust(capture.rig(), confidences, multiview.min_confidence);

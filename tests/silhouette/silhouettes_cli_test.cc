@@ -118,5 +118,35 @@ TEST(SilhouettesCli, RunWarnsBeforeTrackingWhenGivenMasksDisagreeBetweenCameras)
   EXPECT_NE(run.stdout_text.find("--masks", warning), std::string::npos) << run.stdout_text;
 }
 
+// Issue 20, part 4: a calibration that gives the sensor's rows (a few more than the images
+// have) is fitted with a warning; a larger difference is still an error naming both sizes.
+TEST(SilhouettesCli, SensorPaddingInTheCalibrationIsFittedWithAWarning) {
+  testing::TempDir dir;
+  const std::string capture = dir / "tiny";
+  auto synth = testing::RunConfluent({"synth", "--preset", "tiny", "--out", capture, "--gt", dir / "tiny_gt"});
+  ASSERT_EQ(synth.exit_code, 0) << synth.stderr_text;
+  auto set_rows = [&](int rows) {
+    std::ifstream in(capture + "/intri.yml");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text = std::regex_replace(text, std::regex("H_cam01: [0-9]+"), "H_cam01: " + std::to_string(rows));
+    std::ofstream(capture + "/intri.yml") << text;
+  };
+  set_rows(128);  // the images have 120
+  auto run = testing::RunConfluent(
+      {"silhouettes", capture, "--out", dir / "masks", "--compare", dir / "tiny_gt/masks", "--no-overlays"});
+  ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+  EXPECT_NE(run.stderr_text.find("camera cam01: images are 160x120"), std::string::npos) << run.stderr_text;
+  EXPECT_NE(run.stderr_text.find("calibration says 160x128: taken as sensor padding"), std::string::npos)
+      << run.stderr_text;
+  // The principal point is kept, so the masks are those of the unpadded capture (0.970 measured).
+  EXPECT_GE(ReportedIou(run.stdout_text).first, 0.95) << run.stdout_text;
+  set_rows(160);  // 40 rows: not padding
+  auto bad = testing::RunConfluent({"silhouettes", capture, "--out", dir / "masks2", "--no-overlays"});
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.stderr_text.find("image is 160x120 but the calibration of camera cam01 says 160x160"),
+            std::string::npos)
+      << bad.stderr_text;
+}
+
 }  // namespace
 }  // namespace confluent
