@@ -16,6 +16,14 @@ void ShapeArrays(const double* shape, double* length, double* girth) {
   }
 }
 
+void AddShapeProportionPrior(double weight, double* shape, ceres::Problem* problem) {
+  constexpr int n = kNumShapeGroups;
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(kShapeBlockSize, kShapeBlockSize);
+  for (int half = 0; half < 2; ++half)
+    P.block(half * n, half * n, n, n) = weight * (Eigen::MatrixXd::Identity(n, n) - Eigen::MatrixXd::Constant(n, n, 1.0 / n));
+  problem->AddResidualBlock(new ceres::NormalPrior(P, Eigen::VectorXd::Zero(kShapeBlockSize)), nullptr, shape);
+}
+
 void ShapeToParams(const BodyShape& shape, double* params, double* skirt) {
   if (skirt) {
     skirt[0] = shape.skirt_length_m;

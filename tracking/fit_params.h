@@ -32,6 +32,11 @@ struct FitParams {
   double skirt[2] = {0.0, 0.0};  // BodyShape::skirt_length_m, skirt_flare_m (lower torso only)
 };
 
+// Adds to `problem` a prior towards human proportions on the shape block `shape`: each group's
+// length (girth) scale towards the mean of the current length (girth) scales, with `weight`.
+// The overall size stays free.
+void AddShapeProportionPrior(double weight, double* shape, ceres::Problem* problem);
+
 // Per-segment length and girth scales from a shape block.
 void ShapeArrays(const double* shape, double* length, double* girth);
 // The shape block of `shape` (group means) and back; `skirt` (2 values, may be null) carries

@@ -82,28 +82,6 @@ std::vector<TemplatePose> LimbHypotheses(const BodyTemplate& body, const Templat
       hypotheses.push_back(hypothesis);
     }
   }
-  // The upper segment where it is, turned about its own axis, with the elbow or knee bent
-  // differently: the forearm or shank swung into another plane (a forearm folded the wrong way,
-  // a shank lifted behind instead of hanging).
-  const Vector3d current = pose.dofs[root][0] * Vector3d::UnitX() + pose.dofs[root][1] * Vector3d::UnitY() +
-                           pose.dofs[root][2] * Vector3d::UnitZ();
-  const Eigen::Matrix3d current_rotation =
-      current.norm() > 1e-12 ? Eigen::AngleAxisd(current.norm(), current.normalized()).toRotationMatrix()
-                             : Eigen::Matrix3d::Identity();
-  const Vector3d upper_axis = current_rotation * rest_direction;
-  // Hips turn little about the thigh (a knee bends in one plane); shoulders turn all round.
-  for (double twist_deg : arm ? std::vector<double>{0, 90, 180, 270} : std::vector<double>{0, 40, -40}) {
-    const Eigen::AngleAxisd turned(Eigen::AngleAxisd(twist_deg * kDeg, upper_axis).toRotationMatrix() * current_rotation);
-    for (double bend : arm ? std::vector<double>{5, 45, 90, 130} : std::vector<double>{0, 45, 90, 120}) {
-      TemplatePose hypothesis = pose;
-      const Vector3d rotation = turned.angle() * turned.axis();
-      hypothesis.dofs[root] = {rotation.x(), rotation.y(), rotation.z()};
-      hypothesis.dofs[middle] = {0.0, 0.0, 0.0};
-      hypothesis.dofs[middle][0] = std::clamp((arm ? 1.0 : -1.0) * bend * kDeg, bend_dof.lower[0], bend_dof.upper[0]);
-      body.ClampToLimits(&hypothesis);
-      hypotheses.push_back(hypothesis);
-    }
-  }
   return hypotheses;
 }
 

@@ -410,15 +410,8 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
       b(i) = shape_prior[i];
     }
     problem.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, fp->shape);
-    if (options.shape_proportion_weight > 0) {
-      // w (s_g - mean of the same kind): lengths and girths separately.
-      constexpr int n = ti::kNumShapeGroups;
-      Eigen::MatrixXd P = Eigen::MatrixXd::Zero(kShapeBlockSize, kShapeBlockSize);
-      for (int half = 0; half < 2; ++half)
-        P.block(half * n, half * n, n, n) =
-            options.shape_proportion_weight * (Eigen::MatrixXd::Identity(n, n) - Eigen::MatrixXd::Constant(n, n, 1.0 / n));
-      problem.AddResidualBlock(new ceres::NormalPrior(P, Eigen::VectorXd::Zero(kShapeBlockSize)), nullptr, fp->shape);
-    }
+    if (options.shape_proportion_weight > 0)
+      ti::AddShapeProportionPrior(options.shape_proportion_weight, fp->shape, &problem);
     for (int i = 0; i < kShapeBlockSize; ++i) {
       problem.SetParameterLowerBound(fp->shape, i, 0.6 * shape_prior[i]);
       problem.SetParameterUpperBound(fp->shape, i, 1.6 * shape_prior[i]);

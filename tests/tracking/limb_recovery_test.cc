@@ -142,47 +142,5 @@ TEST(LimbHypotheses, MoveOnlyTheirLimbWithinTheJointLimits) {
   }
 }
 
-// A forearm swung into another plane (the upper arm right, the shoulder turned about it by 90
-// degrees, the elbow bent more) and a shank lifted behind instead of hanging (the hip turned
-// 40 degrees, within its limits, the knee bent): among the
-// hypotheses is one with the elbow (knee) where it is and the wrist (ankle) where the truth has it.
-TEST(LimbHypotheses, IncludeTheDistalSegmentSwungAboutTheUpperOne) {
-  const BodyTemplate body;
-  const BodyShape shape = BodyShape::Uniform(1.75);
-  struct Case {
-    int root;
-    std::array<double, 3> upper;
-    double twist, truth_bend, start_bend;
-    Limb limb;
-  };
-  for (const Case& c : {Case{kJointRightShoulder, {0.3, -0.8, 0.4}, M_PI / 2, 1.6, 0.1, Limb::kRightArm},
-                        Case{kJointLeftHip, {0.2, 0.1, 0.05}, -0.7, -1.5, 0.0, Limb::kLeftLeg}}) {
-    TemplatePose start;
-    start.dofs[c.root] = c.upper;
-    start.dofs[c.root + 1] = {c.start_bend, 0, 0};
-    // The truth: the same upper segment turned about itself, the hinge bent more.
-    const Eigen::Vector3d v(c.upper[0], c.upper[1], c.upper[2]);
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(v.norm(), v.normalized()).toRotationMatrix();
-    const auto& rest = body.generic_rest();
-    const Eigen::Vector3d axis = R * (rest[c.root + 1] - rest[c.root]).normalized();
-    const Eigen::AngleAxisd turned(Eigen::AngleAxisd(c.twist, axis).toRotationMatrix() * R);
-    TemplatePose truth = start;
-    truth.dofs[c.root] = {turned.angle() * turned.axis().x(), turned.angle() * turned.axis().y(),
-                          turned.angle() * turned.axis().z()};
-    truth.dofs[c.root + 1] = {c.truth_bend, 0, 0};
-    const auto truth_joints = body.JointPositions(shape, truth);
-    const auto start_joints = body.JointPositions(shape, start);
-    EXPECT_GT((start_joints[c.root + 2] - truth_joints[c.root + 2]).norm(), 0.2) << LimbName(c.limb);
-    double best = 1e9;
-    for (const TemplatePose& hypothesis : LimbHypotheses(body, start, c.limb)) {
-      const auto joints = body.JointPositions(shape, hypothesis);
-      if ((joints[c.root + 1] - truth_joints[c.root + 1]).norm() > 0.01) continue;  // the upper segment kept
-      best = std::min(best, (joints[c.root + 2] - truth_joints[c.root + 2]).norm());
-    }
-    // Bends are tried 45 degrees apart: the nearest is within about 12 degrees of the truth's.
-    EXPECT_LT(best, 0.06) << LimbName(c.limb);
-  }
-}
-
 }  // namespace
 }  // namespace confluent
