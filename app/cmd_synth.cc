@@ -54,6 +54,7 @@ int RunSynth(const ParsedArgs& args, const Context& context) {
   options.motion.bvh.up_axis = bvh_up == "auto" ? 'a' : bvh_up[0];
   options.motion.bvh_start_s = args.get_double("bvh-start", 0.0);
   options.motion.bvh_in_place = args.has("bvh-in-place");
+  options.scan_frame = args.get_int("scan-frame", -1);
   if ((args.has("bvh-start") || args.has("bvh-in-place")) && options.motion.bvh_path.empty())
     throw UsageError("--bvh-start and --bvh-in-place go with --bvh FILE");
   if (!options.motion.bvh_path.empty() && !options.actor_sequence_dir.empty())
@@ -116,7 +117,8 @@ CommandSpec MakeSynthCommand() {
                   {"bvh-map", "T=B,...", "BVH joint names for actor joints, e.g. left_shoulder=LeftArm"},
                   {"bvh-up", "AXIS", "up axis of the BVH: auto (default), y or z"},
                   {"bvh-start", "S", "start the performance S seconds into the BVH (default 0)"},
-                  {"bvh-in-place", "", "perform a travelling BVH on the spot (its slow travel removed)"}};
+                  {"bvh-in-place", "", "perform a travelling BVH on the spot (its slow travel removed)"},
+                  {"scan-frame", "N", "the scan is the actor as posed at frame N (default: its rest mesh)"}};
   spec.run = RunSynth;
   return spec;
 }

@@ -287,6 +287,7 @@ std::string OptionsJson(const StudioSynthOptions& o, const StudioSynthSummary& s
       << ",\n  \"motion\": \"" << (o.motion.bvh_path.empty() ? "default" : o.motion.bvh_path) << "\""
       << ",\n  \"bvh_start_s\": " << JsonNumber(o.motion.bvh_start_s)
       << ",\n  \"bvh_in_place\": " << (o.motion.bvh_in_place ? "true" : "false")
+      << ",\n  \"scan_frame\": " << o.scan_frame
       << ",\n  \"actor_vertices\": " << s.num_vertices << ",\n  \"actor_triangles\": " << s.num_triangles
       << ",\n  \"skinning\": \"" << (o.skinning == SkinningMethod::kLinear ? "linear" : "dual_quaternion") << "\""
       << ",\n  \"green_screen\": " << (o.scene.green_screen ? "true" : "false")
@@ -320,6 +321,7 @@ void StudioSynthOptions::Check() const {
                 "in [0, 50] grey levels (--noise)");
   RequireOption(gain_spread >= 0.0 && gain_spread < 0.5, owner + "gain_spread", gain_spread, "in [0, 0.5)");
   RequireOption(threads >= 1 && threads <= 64, owner + "threads", threads, "in [1, 64]");
+  RequireOption(scan_frame >= -1, owner + "scan_frame", scan_frame, ">= -1 (-1: the rest mesh; --scan-frame)");
 }
 
 std::string DefaultGroundTruthDir(const std::string& capture_dir) {
@@ -356,13 +358,18 @@ StudioSynthSummary SynthesizeCapture(const StudioSynthOptions& options, const Pr
   summary.num_frames = source->num_frames();
   summary.num_vertices = rest.num_vertices();
   summary.num_triangles = rest.num_faces();
+  if (options.scan_frame >= summary.num_frames)
+    throw UsageError("StudioSynthOptions.scan_frame = " + std::to_string(options.scan_frame) +
+                     ": must be below the number of frames, " + std::to_string(summary.num_frames) + " (--scan-frame)");
 
   const Rig rig = MakeStudioRig(options.rig);
   summary.num_cameras = rig.size();
   WriteEasyMocap(rig, capture);
   WriteEasyMocap(rig, gt);
-  WriteMesh(capture + "/scan.ply", rest);
-  WriteMesh(gt + "/scan.ply", rest);
+  Mesh scan = rest;
+  if (options.scan_frame >= 0) scan.vertices = source->FrameVertices(options.scan_frame);
+  WriteMesh(capture + "/scan.ply", scan);
+  WriteMesh(gt + "/scan.ply", scan);
   if (procedural) {
     WriteTextFile(gt + "/skeleton.json", SkeletonJson(procedural->actor().skeleton, procedural->actor()));
     WriteTextFile(gt + "/skin.json", StudioSkinJson(procedural->actor()));

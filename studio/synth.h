@@ -43,6 +43,9 @@ struct StudioSynthOptions {
   std::string actor_mesh_path;
   std::string actor_skin_path;
   char sequence_up_axis = 'z';
+  // The scan (scan.ply) is the actor's rest mesh (-1), or the actor as posed at this frame of the
+  // performance: a scan taken in the performer's first pose (crouched, arms against the body).
+  int scan_frame = -1;
   double noise_sigma = 2.0;       // Gaussian sensor noise, 8-bit grey levels (0 = none)
   double gain_spread = 0.06;      // per-camera gain drawn from [1 - spread, 1 + spread]
   unsigned seed = 1;              // noise and gains

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"
+#include "studio/actor.h"
 #include "studio/presets.h"
 #include "studio/synth.h"
 #include "tests/support/test_support.h"
@@ -134,6 +135,24 @@ TEST(StudioSynth, TinyCaptureIsConsistentWithItsGroundTruth) {
   double difference = 0.0;
   for (int x = 0; x < 20; ++x) difference += std::abs(image.at<std::uint8_t>(x, 5, 1) - plate.at<std::uint8_t>(x, 5, 1));
   EXPECT_LT(difference / 20.0, 6.0);
+}
+
+// --scan-frame: the scan is the actor as posed at that frame (its ground-truth mesh, with the
+// rest mesh's colours); a frame beyond the performance is refused.
+TEST(StudioSynth, ScanFrameIsTheActorAsPosedAtThatFrame) {
+  testing::TempDir dir;
+  StudioSynthOptions options = TinyOptions(dir.path());
+  options.scan_frame = 2;
+  const StudioSynthSummary summary = SynthesizeCapture(options);
+  const Mesh scan = ReadMesh(options.capture_dir + "/scan.ply");
+  const Mesh posed = ReadMesh(summary.ground_truth_dir + "/meshes/000002.ply");
+  const Mesh rest = BuildStudioActor(options.actor).mesh;
+  ASSERT_EQ(scan.num_vertices(), posed.num_vertices());
+  EXPECT_LT((scan.vertices - posed.vertices).cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_GT((scan.vertices - rest.vertices).rowwise().norm().maxCoeff(), 0.05);  // the pose differs from rest
+  EXPECT_TRUE(scan.has_colors());
+  options.scan_frame = summary.num_frames;
+  EXPECT_THROW(SynthesizeCapture(options), UsageError);
 }
 
 TEST(StudioSynth, BadOptionsThrowUsageError) {
