@@ -118,6 +118,12 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
     correct[c] = !excluded(c) && ((method == SilhouetteMethod::kLearned && options.multiview_correct_learned) ||
                                   (method == SilhouetteMethod::kPlate && options.multiview_correct_plates));
   }
+  // With nothing to correct (every camera has a plate) the check only gives confidences: a
+  // coarser hull does (builtin capture, 512x384, 10 cameras x 50 frames: 4.5 s without the
+  // check, 12.4 s with it at 128 voxels, 7.4 s at 64).
+  const bool any_correct = std::find(correct.begin(), correct.end(), true) != correct.end();
+  MultiViewOptions check_only = options.plate_free.multiview;
+  check_only.grid_resolution = std::min(check_only.grid_resolution, 64);
   int start = end_frame;
   for (int c = 0; c < num_cameras; ++c) start = std::min(start, resume(c));
   if (mog2) start = first_frame;
@@ -142,7 +148,8 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
       std::vector<Image> checked(num_cameras);  // excluded cameras: no mask
       for (int c = 0; c < num_cameras; ++c)
         if (!excluded(c)) checked[c] = std::move(masks[c]);
-      views = CheckMultiView(capture.rig(), &checked, correct, multiview, &hulls, &strict_hulls);
+      views = CheckMultiView(capture.rig(), &checked, correct, any_correct ? multiview : check_only, &hulls,
+                             &strict_hulls);
       for (int c = 0; c < num_cameras; ++c) {
         if (excluded(c)) continue;
         masks[c] = std::move(checked[c]);

@@ -54,6 +54,9 @@ Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull
   cv::Mat bgr;
   cv::cvtColor(AsCvMat(frame)(box), bgr, cv::COLOR_RGB2BGR);
   cv::Mat background_model, foreground_model;
+  // grabCut seeds its colour models with k-means on the thread's random generator: a fixed seed
+  // makes the result independent of which thread, and after what, refines this mask.
+  cv::theRNG() = cv::RNG(0x2545F491u);
   cv::grabCut(bgr, labels, cv::Rect(), background_model, foreground_model, options.iterations, cv::GC_INIT_WITH_MASK);
   Image refined(mask.width, mask.height, 1);
   cv::Mat out = AsCvMat(refined);
