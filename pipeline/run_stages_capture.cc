@@ -96,11 +96,15 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
   };
   const SilhouetteSummary summary =
       ExtractSilhouettes(capture, inputs.frames.first, inputs.frames.end, options, sink, progress, first_missing);
-  for (const std::string& warning : summary.warnings) report.notes.push_back(warning);
+  for (const std::string& warning : summary.warnings)
+    if (warning != summary.trust.warning) report.notes.push_back(warning);  // said first, below
   report.computed = inputs.frames.end - frames_done;
   report.seconds = NowSeconds() - start;
   timings->Save();
-  WarnUntrustedMasks(inputs, &report);
+  if (!summary.trust.warning.empty())  // the masks just made, every frame checked
+    report.notes.insert(report.notes.begin(), "warning: " + summary.trust.warning);
+  else
+    WarnUntrustedMasks(inputs, &report);  // a resumed run: earlier masks too
   return report;
 }
 

@@ -190,7 +190,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
       if (check.empty) check.confidence = 0;
       check.low_confidence = check.confidence < multiview.min_confidence;
       summary.masks[static_cast<std::size_t>(c) * num_frames + (f - first_frame)] = check;
-      if (f >= resume(c)) confidences.emplace_back(c, check.confidence);
+      if (f >= resume(c) && !excluded(c)) confidences.emplace_back(c, check.confidence);
     }
     ParallelFor(num_cameras, options.threads, [&](int c) {
       if (f < resume(c)) return;
