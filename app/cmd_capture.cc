@@ -26,6 +26,7 @@ int RunCaptureInfo(const ParsedArgs& args, const Context& context) {
     std::printf("%-12s %4dx%-4d %9.1f %9.1f   %s\n", camera.name.c_str(), camera.width, camera.height,
                 camera.K(0, 0), camera.K(1, 1), capture.BackgroundPath(c).empty() ? "-" : "yes");
   }
+  for (const std::string& warning : capture.warnings()) std::printf("warning: %s\n", warning.c_str());
   return 0;
 }
 
