@@ -18,6 +18,7 @@
 #include "refine/silhouette_refinement.h"
 #include "render/camera_path.h"
 #include "render/projective_texture.h"
+#include "tracking/motion_io.h"
 
 namespace confluent {
 namespace fs = std::filesystem;
@@ -37,6 +38,12 @@ StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& 
   ScanCorrespondenceOptions options;
   options.known_shape = shape;
   options.given_path = inputs.correspondences_path;
+  try {
+    const PosesFile tracked = ReadPosesJson(inputs.folder.Path("poses.json"), body);
+    if (!tracked.frames.empty()) options.first_tracked_pose = tracked.frames.front().pose;
+  } catch (const InputError&) {
+    // No readable poses.json (a shard): registration without the first tracked pose.
+  }
   const ScanCorrespondence result = CorrespondTemplateToScan(body, *inputs.scan, inputs.scan_path, options);
   char residual[64];
   std::snprintf(residual, sizeof residual, "template registered to the scan: rms residual %.2f cm",

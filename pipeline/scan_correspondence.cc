@@ -22,13 +22,29 @@ ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh
     result.registration = RegisterTemplateToScan(body, scan, registration_options, scan_path);
   } catch (const InputError& seeded_failure) {
     if (!options.known_shape && !options.initial_pose) throw;
-    // The tracked shape or first pose can be poor (a coarse capture, an unusual first frame):
-    // register as `confluent correspond` does, from the scan alone with the shape fitted. The
-    // reference below keeps the tracked shape, which the tracked template meshes have.
-    result.registration = RegisterTemplateToScan(body, scan, ScanRegistrationOptions(), scan_path);
-    result.registration.warnings.push_back(std::string("the registration from the tracked shape and pose failed (") +
-                                           seeded_failure.what() +
-                                           "); the template was registered from the scan alone, its shape fitted");
+    bool registered = false;
+    if (options.first_tracked_pose) {
+      // A scan in the performer's first pose: start there rather than from a standing body.
+      ScanRegistrationOptions from_first_frame = registration_options;
+      from_first_frame.initial_pose = options.first_tracked_pose;
+      try {
+        result.registration = RegisterTemplateToScan(body, scan, from_first_frame, scan_path);
+        result.registration.warnings.push_back(std::string("the registration from the tracked shape failed (") +
+                                               seeded_failure.what() +
+                                               "); it was started from the first tracked frame's pose instead");
+        registered = true;
+      } catch (const InputError&) {
+      }
+    }
+    if (!registered) {
+      // The tracked shape or first pose can be poor (a coarse capture, an unusual first frame):
+      // register as `confluent correspond` does, from the scan alone with the shape fitted. The
+      // reference below keeps the tracked shape, which the tracked template meshes have.
+      result.registration = RegisterTemplateToScan(body, scan, ScanRegistrationOptions(), scan_path);
+      result.registration.warnings.push_back(std::string("the registration from the tracked shape and pose failed (") +
+                                             seeded_failure.what() +
+                                             "); the template was registered from the scan alone, its shape fitted");
+    }
   }
   const BodyShape& shape = options.known_shape ? *options.known_shape : result.registration.shape;
   result.reference = body.PosedMesh(shape, result.registration.pose);

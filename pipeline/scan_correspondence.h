@@ -19,6 +19,10 @@ struct ScanCorrespondenceOptions {
   // reference template keeps exactly this shape. Absent: the shape is fitted to the scan.
   std::optional<BodyShape> known_shape;
   std::optional<TemplatePose> initial_pose;  // where the registration starts (a tracked pose)
+  // Tried when the registration from known_shape / initial_pose fails, before the scan alone:
+  // the first tracked frame's pose, for a scan taken in the performer's first pose (crouched,
+  // arms against the body) that a start from a standing body does not reach.
+  std::optional<TemplatePose> first_tracked_pose;
   std::string given_path;   // correspondences to read and validate instead of placing; "": place
   std::string manual_path;  // with placement: pairs kept first, the automatic ones complete them
   double joint_clearance_m = CorrespondencePlacementOptions().joint_clearance_m;
@@ -33,8 +37,8 @@ struct ScanCorrespondence {
 };
 
 // Registers `body` to `scan` (read from `scan_path`) and places or reads the pairs. When the
-// registration seeded by a known shape or pose fails, it is done again from the scan alone
-// (with a warning in registration.warnings). Throws InputError naming the scan or a
+// registration seeded by a known shape or pose fails, it is done again from the first tracked
+// pose (when given), else from the scan alone (with a warning in registration.warnings). Throws InputError naming the scan or a
 // correspondences file, UsageError for a bad option.
 ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh& scan, const std::string& scan_path,
                                             const ScanCorrespondenceOptions& options);

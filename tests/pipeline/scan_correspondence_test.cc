@@ -1,11 +1,12 @@
 // One register -> place path for run, correspond and animate: a registration seeded by a poor
-// tracked shape falls back to registering from the scan alone.
+// tracked shape falls back to the first tracked pose, then to registering from the scan alone.
 
 #include "pipeline/scan_correspondence.h"
 
 #include <gtest/gtest.h>
 
 #include "core/error.h"
+#include "core/skinning.h"
 #include "studio/actor.h"
 
 namespace confluent {
@@ -34,6 +35,57 @@ TEST(ScanCorrespondence, PoorTrackedShapeFallsBackToRegisteringFromTheScanAlone)
   const double reference_height =
       result.reference.vertices.col(2).maxCoeff() - result.reference.vertices.col(2).minCoeff();
   EXPECT_LT(reference_height, 1.3);
+}
+
+// A scan taken in the performer's first pose, deeply crouched with the arms forward (the studio
+// actor posed so): the registration from a standing start fails; the one from the first tracked
+// frame's pose (the template's crouch, a little off) finds it.
+TEST(ScanCorrespondence, CrouchedScanIsRegisteredFromTheFirstTrackedPose) {
+  StudioActorOptions actor_options;
+  actor_options.target_triangles = 12000;
+  const StudioActor actor = BuildStudioActor(actor_options);
+  const BodyTemplate body;
+  // Rotations about the lateral axis (x; the body faces +y, z up): positive swings a downward
+  // segment forwards.
+  auto about_x = [](double angle) { return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX())); };
+  Pose crouch = Pose::Rest(actor.skeleton.size());
+  crouch.local_rotations[kJointChest] = about_x(-0.3);
+  for (int hip : {kJointLeftHip, kJointRightHip}) {
+    crouch.local_rotations[hip] = about_x(1.3);
+    crouch.local_rotations[hip + 1] = about_x(-2.1);
+    crouch.local_rotations[hip + 2] = about_x(0.8);
+  }
+  for (int shoulder : {kJointLeftShoulder, kJointRightShoulder}) {
+    crouch.local_rotations[shoulder] = about_x(1.2);
+    crouch.local_rotations[shoulder + 1] = about_x(1.3);
+  }
+  Mesh scan = actor.mesh;
+  scan.vertices = SkinVertices(actor.mesh.vertices, actor.weights, actor.skeleton, crouch, SkinningMethod::kDualQuaternion);
+  const BodyShape shape = BodyShape::Uniform(1.75);
+  ScanCorrespondenceOptions options;
+  options.known_shape = shape;
+  ScanRegistrationOptions standing;
+  standing.fit_shape = false;
+  standing.initial_shape = shape;
+  EXPECT_THROW(RegisterTemplateToScan(body, scan, standing, "crouched.ply"), InputError);
+
+  // The tracker's first frame: the template crouched alike, its joint angles a little off.
+  TemplatePose tracked;
+  tracked.root_translation = WorldFromJoint(actor.skeleton, crouch)[kJointPelvis].translation() -
+                             body.JointPositions(shape, TemplatePose())[kJointPelvis];
+  tracked.dofs[kJointChest] = {-0.25, 0, 0};
+  for (int hip : {kJointLeftHip, kJointRightHip}) {
+    tracked.dofs[hip] = {1.2, 0, 0};
+    tracked.dofs[hip + 1] = {-1.9, 0, 0};
+  }
+  options.first_tracked_pose = tracked;
+  const ScanCorrespondence result = CorrespondTemplateToScan(body, scan, "crouched.ply", options);
+  bool warned = false;
+  for (const std::string& warning : result.registration.warnings)
+    warned = warned || warning.find("first tracked frame") != std::string::npos;
+  EXPECT_TRUE(warned);
+  EXPECT_LT(result.registration.trimmed_rms_residual_m, 0.03);
+  EXPECT_GT(result.correspondences.pairs.size(), 50u);
 }
 
 TEST(ScanCorrespondence, WhatIsNoBodyIsStillRefused) {
