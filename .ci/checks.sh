@@ -12,7 +12,8 @@ step() {
 # (whole-body Ceres fits, checkerboard calibrations, real footage: 20 s to 8 min each there,
 # about 25 min together on 2 cores). They run unsanitized in ./dev test below, and sanitized
 # in `./dev test --sanitize` by hand.
-heavy='^(SambaRealMotion|SilhouetteFit|SkirtFit|LimbRecovery|ScanCorrespondence|ScanRegistration|Calibrate|RealSilhouettes|RealCheckerboard|CorrespondencePlacement|TemplateMotion|TrackCommand)\.'
+# The plate-free silhouette tests (issue 20) are among them: 4 to 7.5 min each sanitized.
+heavy='^(SambaRealMotion|SilhouetteFit|SkirtFit|LimbRecovery|ScanCorrespondence|ScanRegistration|Calibrate|RealSilhouettes|RealCheckerboard|CorrespondencePlacement|TemplateMotion|TrackCommand|PlateFree)\.|^SilhouettesCli\.(TinySynthCapture|WithoutAnyPlate|RunWarnsBefore)'
 step ./dev test --sanitize -L unit -E "$heavy"
 step ./dev fuzz --seconds 30 --seed 1
 step ./dev demo --preset tiny --out /tmp/confluent-ci-demo
