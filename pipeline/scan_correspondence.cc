@@ -7,6 +7,36 @@
 
 namespace confluent {
 
+namespace {
+
+// The registration from the tracked shape and pose failed with `failure`. A scan in the
+// performer's first pose is started from the first tracked frame's pose; failing that (the
+// tracked shape or pose can be poor: a coarse capture, an unusual first frame), the template is
+// registered as `confluent correspond` does, from the scan alone with the shape fitted. The
+// caller's reference keeps the tracked shape, which the tracked template meshes have.
+ScanRegistration RegisterAfterSeededFailure(const BodyTemplate& body, const Mesh& scan, const std::string& scan_path,
+                                            const ScanRegistrationOptions& seeded,
+                                            const ScanCorrespondenceOptions& options, const std::string& failure) {
+  if (options.first_tracked_pose) {
+    ScanRegistrationOptions from_first_frame = seeded;
+    from_first_frame.initial_pose = options.first_tracked_pose;
+    try {
+      ScanRegistration registration = RegisterTemplateToScan(body, scan, from_first_frame, scan_path);
+      registration.warnings.push_back("the registration from the tracked shape failed (" + failure +
+                                      "); it was started from the first tracked frame's pose instead");
+      return registration;
+    } catch (const InputError&) {
+      // On to the scan alone.
+    }
+  }
+  ScanRegistration registration = RegisterTemplateToScan(body, scan, ScanRegistrationOptions(), scan_path);
+  registration.warnings.push_back("the registration from the tracked shape and pose failed (" + failure +
+                                  "); the template was registered from the scan alone, its shape fitted");
+  return registration;
+}
+
+}  // namespace
+
 ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh& scan, const std::string& scan_path,
                                             const ScanCorrespondenceOptions& options) {
   RequireOption(options.joint_clearance_m >= 0.0, "ScanCorrespondenceOptions.joint_clearance_m",
@@ -22,29 +52,8 @@ ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh
     result.registration = RegisterTemplateToScan(body, scan, registration_options, scan_path);
   } catch (const InputError& seeded_failure) {
     if (!options.known_shape && !options.initial_pose) throw;
-    bool registered = false;
-    if (options.first_tracked_pose) {
-      // A scan in the performer's first pose: start there rather than from a standing body.
-      ScanRegistrationOptions from_first_frame = registration_options;
-      from_first_frame.initial_pose = options.first_tracked_pose;
-      try {
-        result.registration = RegisterTemplateToScan(body, scan, from_first_frame, scan_path);
-        result.registration.warnings.push_back(std::string("the registration from the tracked shape failed (") +
-                                               seeded_failure.what() +
-                                               "); it was started from the first tracked frame's pose instead");
-        registered = true;
-      } catch (const InputError&) {
-      }
-    }
-    if (!registered) {
-      // The tracked shape or first pose can be poor (a coarse capture, an unusual first frame):
-      // register as `confluent correspond` does, from the scan alone with the shape fitted. The
-      // reference below keeps the tracked shape, which the tracked template meshes have.
-      result.registration = RegisterTemplateToScan(body, scan, ScanRegistrationOptions(), scan_path);
-      result.registration.warnings.push_back(std::string("the registration from the tracked shape and pose failed (") +
-                                             seeded_failure.what() +
-                                             "); the template was registered from the scan alone, its shape fitted");
-    }
+    result.registration = RegisterAfterSeededFailure(body, scan, scan_path, registration_options, options,
+                                                     seeded_failure.what());
   }
   const BodyShape& shape = options.known_shape ? *options.known_shape : result.registration.shape;
   result.reference = body.PosedMesh(shape, result.registration.pose);
