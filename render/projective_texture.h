@@ -26,6 +26,7 @@
 // several cameras see well (log-colour differences; a weak prior keeps the mean gain near 1).
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -131,6 +132,17 @@ class ProjectiveTexturer {
   // cameras; an empty vector removes them. Throws UsageError before SetFrame or for a wrong count,
   // InputError for a gain that is not finite and positive.
   void SetViewGains(const std::vector<Eigen::Vector3d>& gains);
+
+  // Blended colours of world-space surface points as seen by a viewer straight along each
+  // point's normal (for baking textures, export/atlas_bake.h): the same visibility, ULR weights,
+  // feathering, grazing ramp and colour gains (balance and SetViewGains) as Render, with the novel
+  // view's centre at points.row(i) + view_distance_m * normals.row(i). `points` and `normals` are
+  // n x 3, world frame, metres; normals unit length, pointing out of the surface. Writes n x 3
+  // RGB8 into `rgb`, and into `seen` 1 where a camera sees the point, 0 where none does (its
+  // colour is then 0; the caller picks the fallback, e.g. the mesh's vertex colours). Runs on all
+  // cores. Throws UsageError before SetFrame, for mismatched sizes or view_distance_m <= 0.
+  void BlendSurfacePoints(const RowMatrixX3f& points, const RowMatrixX3f& normals, double view_distance_m,
+                          std::vector<std::uint8_t>* rgb, std::vector<std::uint8_t>* seen) const;
 
   // Per-camera statistics of the last SetFrame.
   const TextureFrameInfo& frame_info() const;

@@ -375,4 +375,34 @@ void ProjectiveTexturer::Impl::SetBlendCameras() {
   }
 }
 
+void ProjectiveTexturer::BlendSurfacePoints(const RowMatrixX3f& points, const RowMatrixX3f& normals,
+                                            double view_distance_m, std::vector<std::uint8_t>* rgb,
+                                            std::vector<std::uint8_t>* seen) const {
+  const Impl& s = *impl_;
+  if (!s.frame_set) throw UsageError("ProjectiveTexturer::BlendSurfacePoints: SetFrame was not called");
+  if (points.rows() != normals.rows())
+    throw UsageError("ProjectiveTexturer::BlendSurfacePoints: " + std::to_string(points.rows()) + " points and " +
+                     std::to_string(normals.rows()) + " normals");
+  if (!(view_distance_m > 0.0))
+    throw UsageError("ProjectiveTexturer::BlendSurfacePoints: view_distance_m must be > 0, got " +
+                     std::to_string(view_distance_m));
+  const std::size_t n = static_cast<std::size_t>(points.rows());
+  rgb->assign(3 * n, 0);
+  seen->assign(n, 0);
+  const BlendInput in = s.MakeBlendInput(Camera());
+  const auto distance = static_cast<float>(view_distance_m);
+  constexpr int kChunk = 4096;
+  const int chunks = static_cast<int>((n + kChunk - 1) / kChunk);
+  Impl::ForRowBands(chunks, [&](int chunk) {
+    BlendInput point_in = in;
+    const std::size_t end = std::min(n, static_cast<std::size_t>(chunk + 1) * kChunk);
+    for (std::size_t i = static_cast<std::size_t>(chunk) * kChunk; i < end; ++i) {
+      const Eigen::Vector3f X = points.row(static_cast<Eigen::Index>(i)).transpose();
+      const Eigen::Vector3f normal = normals.row(static_cast<Eigen::Index>(i)).transpose();
+      point_in.view_center = X + distance * normal;
+      (*seen)[i] = BlendPixel(point_in, s.blend_cameras, X, normal, rgb->data() + 3 * i) ? 1 : 0;
+    }
+  });
+}
+
 }  // namespace confluent
