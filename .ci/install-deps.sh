@@ -9,7 +9,7 @@ build=(
   libeigen3-dev libopencv-dev libceres-dev libsuitesparse-dev
   libegl-dev libgl-dev libepoxy-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev
   # libopenimageio-dev's CMake config exports targets for OIIO's tools and fails without them.
-  libopenimageio-dev openimageio-tools nlohmann-json3-dev
+  libopenimageio-dev openimageio-tools nlohmann-json3-dev libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   ffmpeg xvfb xauth python3
 )

@@ -20,6 +20,7 @@
 #include "calib/easymocap_io.h"
 #include "calib/importers_internal.h"
 #include "calib/opencv_storage.h"
+#include "calib/pose2sim_io.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 
@@ -160,8 +161,9 @@ CalibFormat ParseCalibFormat(const std::string& name) {
   if (lower == "qualisys" || lower == "qca") return CalibFormat::kQualisys;
   if (lower == "plain") return CalibFormat::kPlainText;
   if (lower == "opencv-xml" || lower == "opencv") return CalibFormat::kOpenCvXml;
+  if (lower == "pose2sim" || lower == "toml") return CalibFormat::kPose2Sim;
   throw UsageError("unknown calibration format '" + name +
-                   "' (accepted: easymocap, colmap, transforms, qualisys, plain, opencv-xml)");
+                   "' (accepted: easymocap, colmap, transforms, qualisys, plain, opencv-xml, pose2sim)");
 }
 
 Eigen::Matrix3d RotationToZUp(const std::string& up_axis) {
@@ -213,6 +215,9 @@ Rig ImportCalibration(CalibFormat format, const std::string& input_path, const I
     case CalibFormat::kOpenCvXml:
       rig = ReadOpenCvXml(input_path, options);
       default_metres_per_unit = 0.001;
+      break;
+    case CalibFormat::kPose2Sim:
+      rig = ReadPose2SimToml(input_path);
       break;
   }
   const double metres_per_unit = options.metres_per_unit > 0.0 ? options.metres_per_unit : default_metres_per_unit;

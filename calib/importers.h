@@ -15,9 +15,10 @@ enum class CalibFormat {
   kQualisys,        // Qualisys .qca.txt XML (mm)
   kPlainText,       // per-camera blocks: index, K 3x3, k1 k2, [R|t] 3x4 (tsinghua_lkB style)
   kOpenCvXml,       // OpenCV FileStorage XML with CameraMatrix, DistortionCoeffs, rvec/tvec
+  kPose2Sim,        // Pose2Sim TOML (Calib_*.toml): K, distortions, Rodrigues rvec/tvec (metres)
 };
 
-// Parses "easymocap", "colmap", "transforms", "qualisys", "plain", "opencv-xml".
+// Parses "easymocap", "colmap", "transforms", "qualisys", "plain", "opencv-xml", "pose2sim".
 // Throws UsageError listing the accepted names.
 CalibFormat ParseCalibFormat(const std::string& name);
 

@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "calib/easymocap_io.h"
+#include "tests/support/expect_same_rig.h"
 #include "tests/support/test_support.h"
 
 namespace confluent {
@@ -118,6 +119,29 @@ TEST(CalibConvertTest, NanInKIsAnErrorNamingTheFile) {
   EXPECT_EQ(native.exit_code, 1);
   EXPECT_NE(native.stderr_text.find(dir / "native/intri.yml"), std::string::npos) << native.stderr_text;
   EXPECT_NE(native.stderr_text.find("K_a"), std::string::npos) << native.stderr_text;
+}
+
+TEST(CalibConvertTest, NativeRigThroughPose2SimTomlAndBackKeepsEveryCameraTo1e9) {
+  TempDir dir;
+  WriteColmapFolder(dir / "colmap", 1.0);
+  ASSERT_EQ(RunConfluent({"calib", "convert", "--from", "colmap", "--input", dir / "colmap", "--out", dir / "ours"}).exit_code, 0);
+  // ours -> Pose2Sim TOML (a folder: OUT/Calib.toml) -> ours.
+  const auto to_toml = RunConfluent(
+      {"calib", "convert", "--from", "easymocap", "--input", dir / "ours", "--to", "pose2sim", "--out", dir / "p2s"});
+  ASSERT_EQ(to_toml.exit_code, 0) << to_toml.stderr_text;
+  EXPECT_NE(to_toml.stdout_text.find(dir / "p2s/Calib.toml"), std::string::npos) << to_toml.stdout_text;
+  const auto back = RunConfluent(
+      {"calib", "convert", "--from", "pose2sim", "--input", dir / "p2s/Calib.toml", "--out", dir / "back"});
+  ASSERT_EQ(back.exit_code, 0) << back.stderr_text;
+
+  const Rig ours = ReadEasyMocap(dir / "ours/intri.yml", dir / "ours/extri.yml");
+  const Rig again = ReadEasyMocap(dir / "back/intri.yml", dir / "back/extri.yml");
+  testing::ExpectSameRig(ours, again, 1e-9);
+
+  const auto bad_target = RunConfluent(
+      {"calib", "convert", "--from", "easymocap", "--input", dir / "ours", "--to", "vicon", "--out", dir / "x"});
+  EXPECT_EQ(bad_target.exit_code, 2);
+  EXPECT_NE(bad_target.stderr_text.find("--to"), std::string::npos) << bad_target.stderr_text;
 }
 
 TEST(CalibConvertTest, UnknownFormatOrUnitsAreUsageErrors) {
