@@ -12,7 +12,12 @@ build=(
   libopenimageio-dev openimageio-tools nlohmann-json3-dev libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   ffmpeg xvfb xauth python3
+  # export/: glTF compression and decimation; the web player's three.js comes from npm (below),
+  # and its tests drive Debian's chromium (headless, SwiftShader WebGL) and the Khronos validator.
+  libmeshoptimizer-dev nodejs chromium
 )
+# Debian's npm; a nodejs from elsewhere (e.g. NodeSource) brings its own npm and conflicts with it.
+command -v npm >/dev/null || build+=(npm)
 # AddressSanitizer, UndefinedBehaviorSanitizer and libFuzzer come with Debian's clang.
 sanitize=(clang libclang-rt-dev llvm)
 # A brand-new Debian root for ./dev test --fresh and CI.
@@ -33,14 +38,25 @@ missing=()
 for package in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" || missing+=("$package")
 done
-if [ ${#missing[@]} -eq 0 ]; then
-  exit 0
+if [ ${#missing[@]} -gt 0 ]; then
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "install-deps: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+    sudo="sudo"
+  fi
+  echo "install-deps: installing ${missing[*]}" >&2
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-sudo=""
-if [ "$(id -u)" -ne 0 ]; then
-  command -v sudo >/dev/null || { echo "install-deps: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
-  sudo="sudo"
-fi
-echo "install-deps: installing ${missing[*]}" >&2
-$sudo apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+# The web player's npm packages (export/player/package-lock.json): three.js, which the build
+# embeds into the binary, and the test tools (gltf-validator, playwright-core). Installed again
+# when the lock file is newer than the installed tree.
+case " ${groups[*]} " in
+  *" build "* | *" sanitize "*)
+    player="$(cd "$(dirname "$0")/.." && pwd)/export/player"
+    if [ ! -f "$player/node_modules/.package-lock.json" ] || [ "$player/package-lock.json" -nt "$player/node_modules/.package-lock.json" ]; then
+      echo "install-deps: npm ci in export/player" >&2
+      npm ci --prefix "$player" --no-audit --no-fund --loglevel=error >&2
+    fi
+    ;;
+esac

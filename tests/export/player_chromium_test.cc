@@ -1,0 +1,176 @@
+// export/player_writer.h: the embedded web player, and (the done-when of issue 22) the page in
+// Debian's headless Chromium showing frame N of an export from a fixed camera, compared with
+// confluent's own render (MeshRenderer, unlit, same texture and vertices) of that frame.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/image_metrics.h"
+#include "core/video.h"
+#include "core/video_writer.h"
+#include "export/gltf_writer.h"
+#include "export/player_writer.h"
+#include "render/renderer.h"
+#include "tests/export/gltf_test_scene.h"
+#include "tests/support/test_support.h"
+
+namespace confluent {
+namespace {
+
+std::string FileBytes(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::stringstream bytes;
+  bytes << file.rdbuf();
+  return bytes.str();
+}
+
+TEST(PlayerWriter, WritesTheEmbeddedFilesByteForByte) {
+  testing::TempDir dir;
+  PlayerOptions options;
+  options.video_url = "../atlas.webm";
+  const std::vector<std::string> written = WritePlayer(dir / "player", options);
+  const std::string source = testing::SourceRoot() + "/export/player";
+  const std::string three = source + "/node_modules/three";
+  const std::vector<std::pair<std::string, std::string>> expected = {
+      {"index.html", source + "/index.html"},
+      {"player.js", source + "/player.js"},
+      {"three/three.module.min.js", three + "/build/three.module.min.js"},
+      {"three/three.core.min.js", three + "/build/three.core.min.js"},
+      {"three/addons/loaders/GLTFLoader.js", three + "/examples/jsm/loaders/GLTFLoader.js"},
+      {"three/addons/controls/OrbitControls.js", three + "/examples/jsm/controls/OrbitControls.js"},
+      {"three/addons/libs/meshopt_decoder.module.js", three + "/examples/jsm/libs/meshopt_decoder.module.js"}};
+  for (const auto& [path, original] : expected) {
+    EXPECT_NE(std::find(written.begin(), written.end(), path), written.end()) << path;
+    const std::string bytes = FileBytes(dir / ("player/" + path));
+    EXPECT_GT(bytes.size(), 1000u) << path;
+    if (testing::PlayerNodeModules("three").empty() && path.rfind("three/", 0) == 0) continue;
+    EXPECT_TRUE(bytes == FileBytes(original)) << path << " differs from " << original;
+  }
+  const std::string config = FileBytes(dir / "player/config.json");
+  EXPECT_NE(config.find("\"../scene.glb\""), std::string::npos) << config;
+  EXPECT_NE(config.find("\"../atlas.webm\""), std::string::npos) << config;
+  options.scene_url.clear();
+  EXPECT_THROW(WritePlayer(dir / "other", options), UsageError);
+  EXPECT_THROW(WritePlayer("/proc/confluent-no/player"), OutputError);
+}
+
+// The page's query for a fixed camera and frame.
+std::string CameraQuery(const Camera& camera, int frame) {
+  std::ostringstream query;
+  query.precision(17);
+  query << "fx=" << camera.K(0, 0) << "&fy=" << camera.K(1, 1) << "&cx=" << camera.K(0, 2) << "&cy=" << camera.K(1, 2)
+        << "&width=" << camera.width << "&height=" << camera.height << "&R=";
+  for (int i = 0; i < 9; ++i) query << (i ? "," : "") << camera.rotation(i / 3, i % 3);
+  query << "&t=" << camera.translation.x() << "," << camera.translation.y() << "," << camera.translation.z()
+        << "&frame=" << frame;
+  return query.str();
+}
+
+// Pixels brighter than the black background (the textures have no texel below 28).
+Image Silhouette(const Image& image) {
+  Image mask(image.width, image.height, 1);
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      int brightest = 0;
+      for (int c = 0; c < 3; ++c) brightest = std::max<int>(brightest, image.at<std::uint8_t>(x, y, c));
+      mask.at<std::uint8_t>(x, y) = brightest > 12 ? 255 : 0;
+    }
+  }
+  return mask;
+}
+
+double Iou(const Image& a, const Image& b, Image* intersection) {
+  *intersection = Image(a.width, a.height, 1);
+  long both = 0, either = 0;
+  for (std::size_t i = 0; i < a.data.size(); ++i) {
+    const bool in_a = a.data[i] != 0, in_b = b.data[i] != 0;
+    both += in_a && in_b;
+    either += in_a || in_b;
+    intersection->data[i] = in_a && in_b ? 255 : 0;
+  }
+  return either ? static_cast<double>(both) / either : 0.0;
+}
+
+TEST(PlayerInChromium, FrameFromAFixedCameraMatchesConfluentsRender) {
+  const char* chromium_env = std::getenv("CONFLUENT_CHROMIUM");
+  const std::string chromium = chromium_env ? chromium_env : "/usr/bin/chromium";
+  const std::string modules = testing::PlayerNodeModules("playwright-core");
+  if (!testing::NodeAvailable() || modules.empty() || std::system(("test -x '" + chromium + "'").c_str()) != 0) {
+    GTEST_SKIP() << "needs node, export/player/node_modules/playwright-core (npm ci --prefix export/player) and "
+                 << chromium << " (Debian's chromium; $CONFLUENT_CHROMIUM overrides)";
+  }
+  if (!FfmpegAvailable()) GTEST_SKIP() << "ffmpeg is missing (the atlas video)";
+  std::unique_ptr<MeshRenderer> renderer;
+  try {
+    renderer = std::make_unique<MeshRenderer>();
+  } catch (const std::exception& error) {
+    GTEST_SKIP() << "no EGL context for confluent's render: " << error.what();
+  }
+
+  // The export: scene.glb, atlas.mp4 (H.264, one atlas per frame) and player/.
+  const int frames = 6, shown = 3;
+  const Mesh sphere = testing::TexturedSphere(24, 36);
+  const std::vector<RowMatrixX3d> positions = testing::SphereFrames(sphere, frames);
+  std::vector<Image> atlases;
+  for (int k = 0; k < frames; ++k) atlases.push_back(testing::SphereTexture(k));
+  testing::TempDir dir;
+  WriteGlb(dir / "scene.glb", sphere, positions, atlases[0]);
+  WriteVideo(dir / "atlas.mp4", atlases);
+  WritePlayer(dir / "player");
+
+  const Camera camera = testing::LookAtCamera(Eigen::Vector3d(0, 0.1, 0.15), Eigen::Vector3d(0.8, -1.0, 0.45));
+  const std::string page = "player/index.html?" + CameraQuery(camera, shown);
+  const std::string screenshot = dir / "screenshot.png";
+  const std::string report = testing::CaptureOutput(
+      "node '" + testing::SourceRoot() + "/tests/export/player_screenshot.cjs' '" + modules + "' '" + chromium + "' '" +
+      dir.path() + "' '" + page + "' " + std::to_string(camera.width) + " " + std::to_string(camera.height) + " '" +
+      screenshot + "' 60 2>&1");
+  ASSERT_NE(report.find("\"ready\": true"), std::string::npos) << report;
+  EXPECT_NE(report.find("\"frame\": " + std::to_string(shown)), std::string::npos) << report;
+  const Image browser = ReadImage(screenshot);
+  ASSERT_EQ(browser.width, camera.width);
+  ASSERT_EQ(browser.height, camera.height);
+
+  // confluent's render of the same frame and camera, textured with the same decoded video frame.
+  // Both decode the 8-bit texture from sRGB before filtering and encode sRGB on output
+  // (MeshRenderer: an sRGB texture format and srgb_output; three.js: the video texture's
+  // colorSpace and the renderer's outputColorSpace), so unlit texels come out as they are.
+  VideoReader video(dir / "atlas.mp4");
+  const auto render = [&](int k) {
+    Mesh mesh = sphere;
+    mesh.vertices = positions[k];
+    RenderRequest request;
+    request.meshes = {renderer->AddMesh(mesh, "sphere", video.ReadFrame(k))};
+    request.silhouette = true;
+    request.shading.lit = false;
+    request.shading.srgb_output = true;
+    return renderer->Render(camera, request);
+  };
+  const RenderResult ours = render(shown);
+  Image intersection;
+  const double iou = Iou(Silhouette(browser), ours.silhouette, &intersection);
+  const double psnr = MaskedPsnr(browser, ours.color, intersection);
+  std::printf("player vs confluent, frame %d: silhouette IoU %.4f, PSNR inside %.2f dB\n", shown, iou, psnr);
+  EXPECT_GE(iou, 0.98);
+  EXPECT_GE(psnr, 28.0);
+  // The frame is the one asked for: the neighbours match clearly worse.
+  for (const int other : {shown - 1, shown + 1}) {
+    const RenderResult theirs = render(other);
+    Image other_intersection;
+    const double other_iou = Iou(Silhouette(browser), theirs.silhouette, &other_intersection);
+    EXPECT_LT(other_iou, iou - 0.02) << "frame " << other;
+    EXPECT_LT(MaskedPsnr(browser, theirs.color, other_intersection), psnr - 3.0) << "frame " << other;
+  }
+  if (const char* keep = std::getenv("CONFLUENT_PLAYER_SCREENSHOT")) {  // for looking at them
+    WriteImage(keep, browser);
+    WriteImage(std::string(keep) + ".confluent.png", ours.color);
+  }
+}
+
+}  // namespace
+}  // namespace confluent
