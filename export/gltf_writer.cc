@@ -186,6 +186,8 @@ json Bounds(const std::vector<std::int16_t>& xyzw, bool max) {
 
 void GltfOptions::Check() const {
   RequireOption(std::isfinite(fps) && fps > 0.0, "GltfOptions.fps", fps, "> 0");
+  RequireOption(std::isfinite(position_step_m) && position_step_m > 0.0, "GltfOptions.position_step_m",
+                position_step_m, "> 0");
   RequireOption(decimate_triangles >= 0, "GltfOptions.decimate_triangles", decimate_triangles, ">= 0");
   RequireOption(jpeg_quality >= 1 && jpeg_quality <= 100, "GltfOptions.jpeg_quality", jpeg_quality, "in 1..100");
 }
@@ -212,15 +214,16 @@ std::vector<std::uint8_t> EncodeGlb(const Mesh& scan, const std::vector<RowMatri
   result.triangles = split.num_faces();
   if (n == 0) throw InputError("scan", "has no faces to export");
 
-  // One quantisation for all frames: centre and half extent of the bounding box of the
-  // frames' used vertices, uniform so that the node scale keeps normals undistorted.
+  // One quantisation for all frames: integer steps from the centre of the bounding box of the
+  // frames' used vertices, uniform so that the node scale keeps normals undistorted; coarser
+  // than asked only when int16 cannot span the box.
   Eigen::AlignedBox3d box;
   for (const RowMatrixX3d& frame : frames) {
     for (int v : split.source_vertex) box.extend(frame.row(v).transpose());
   }
   const Eigen::Vector3d center = box.center();
-  const double half_extent = std::max(0.5 * box.sizes().maxCoeff(), 1e-9);
-  result.position_step_m = half_extent / 32767.0;
+  const double step = std::max({options.position_step_m, 0.5 * box.sizes().maxCoeff() / 32767.0, 1e-12});
+  result.position_step_m = step;
 
   const bool compress = options.meshopt_compression;
   if (compress) {
@@ -267,31 +270,38 @@ std::vector<std::uint8_t> EncodeGlb(const Mesh& scan, const std::vector<RowMatri
   const int source_accessor =
       builder.AddAccessor(builder.AddStream(source.data(), n, 4, false, false), kUnsignedInt, n, "SCALAR", false);
 
-  // Per frame: quantised positions and normals (smooth across seams: from the scan's topology).
+  // Per frame: quantised positions and normals (smooth across seams: from the scan's topology);
+  // without per-frame normals, every frame shares frame 0's.
   json meshes = json::array();
   json nodes = json::array();
   json frame_nodes = json::array();
   Mesh topology;
   topology.faces = scan.faces;
+  int normal_accessor = -1;
   for (std::size_t k = 0; k < frames.size(); ++k) {
-    topology.vertices = frames[k];
-    const RowMatrixX3d normals = VertexNormals(topology);
     std::vector<std::int16_t> position(4 * n, 0);
-    std::vector<std::int8_t> normal(4 * n, 0);
     for (std::size_t i = 0; i < n; ++i) {
-      const int v = split.source_vertex[i];
-      const Eigen::Vector3d q = (frames[k].row(v).transpose() - center) / half_extent * 32767.0;
-      Eigen::Vector3d m = normals.row(v).transpose();
-      if (!(m.norm() > 0.5)) m = Eigen::Vector3d::UnitZ();  // a vertex of degenerate faces only
-      m.normalize();
+      const Eigen::Vector3d q = (frames[k].row(split.source_vertex[i]).transpose() - center) / step;
       for (int c = 0; c < 3; ++c) {
         position[4 * i + c] = static_cast<std::int16_t>(std::clamp<long>(std::lround(q[c]), -32767, 32767));
-        normal[4 * i + c] = static_cast<std::int8_t>(std::clamp<long>(std::lround(m[c] * 127.0), -127, 127));
       }
     }
     const int position_accessor = builder.AddAccessor(builder.AddStream(position.data(), n, 8, false), kShort, n,
-                                                      "VEC3", true, Bounds(position, false), Bounds(position, true));
-    const int normal_accessor = builder.AddAccessor(builder.AddStream(normal.data(), n, 4, false), kByte, n, "VEC3", true);
+                                                      "VEC3", false, Bounds(position, false), Bounds(position, true));
+    if (k == 0 || options.per_frame_normals) {
+      topology.vertices = frames[k];
+      const RowMatrixX3d normals = VertexNormals(topology);
+      std::vector<std::int8_t> normal(4 * n, 0);
+      for (std::size_t i = 0; i < n; ++i) {
+        Eigen::Vector3d m = normals.row(split.source_vertex[i]).transpose();
+        if (!(m.norm() > 0.5)) m = Eigen::Vector3d::UnitZ();  // a vertex of degenerate faces only
+        m.normalize();
+        for (int c = 0; c < 3; ++c) {
+          normal[4 * i + c] = static_cast<std::int8_t>(std::clamp<long>(std::lround(m[c] * 127.0), -127, 127));
+        }
+      }
+      normal_accessor = builder.AddAccessor(builder.AddStream(normal.data(), n, 4, false), kByte, n, "VEC3", true);
+    }
     json primitive = {{"attributes", {{"POSITION", position_accessor}, {"NORMAL", normal_accessor}, {"TEXCOORD_0", uv_accessor}}},
                       {"indices", index_accessor},
                       {"material", 0},
@@ -308,7 +318,7 @@ std::vector<std::uint8_t> EncodeGlb(const Mesh& scan, const std::vector<RowMatri
   json root_node = {{"name", kRootName}, {"rotation", {-half_sqrt2, 0.0, 0.0, half_sqrt2}}, {"children", {1}}};
   json scan_node = {{"name", "scan"},
                     {"translation", {center.x(), center.y(), center.z()}},
-                    {"scale", {half_extent, half_extent, half_extent}},
+                    {"scale", {step, step, step}},
                     {"children", frame_nodes}};
   nodes.insert(nodes.begin(), {root_node, scan_node});
 

@@ -21,12 +21,13 @@
 // all of them. Frame nodes have no count limit, stay quantised on the GPU (12 bytes per vertex
 // per frame) and import into Blender as one object per frame with keyed scale.
 //
-// Encoding. KHR_mesh_quantization: positions int16 normalised, normals int8 normalised, UVs
-// uint16 normalised (float when a UV lies outside [0, 1]). Optionally EXT_meshopt_compression
-// (meshoptimizer's vertex and index codecs) on every vertex and index stream: three.js reads it
-// with its MeshoptDecoder; Blender's importer (4.x) does not, so GltfOptions::meshopt_compression
-// = false writes a quantised file without it. The extension is then listed as required, as the
-// file carries no uncompressed fallback. The base colour is an embedded JPEG or PNG on an unlit
+// Encoding. KHR_mesh_quantization: positions int16 (steps of GltfOptions::position_step_m from
+// the centre; the scan node's translation and scale map them to metres), normals int8
+// normalised, UVs uint16 normalised (float when a UV lies outside [0, 1]). Optionally
+// EXT_meshopt_compression (meshoptimizer's vertex and index codecs) on every vertex and index
+// stream: three.js reads it with its MeshoptDecoder; Blender's importer (4.x) does not, so
+// GltfOptions::meshopt_compression = false writes a quantised file without it. When used, the
+// extension is listed as required, as the file carries no uncompressed fallback. The base colour is an embedded JPEG or PNG on an unlit
 // material (KHR_materials_unlit): the atlas already holds the captured light.
 
 #include <cstdint>
@@ -40,6 +41,12 @@ namespace confluent {
 
 struct GltfOptions {
   double fps = 25.0;                // frames per second of the animation
+  // Quantisation step of the positions, metres (int16 steps from the box centre); coarser
+  // when int16 cannot span the frames' bounding box at this step (65534 steps).
+  double position_step_m = 0.0002;
+  // A NORMAL per frame (smooth across seams); false shares frame 0's normals between all
+  // frames: a third smaller, and the unlit material does not use them.
+  bool per_frame_normals = true;
   bool meshopt_compression = true;  // EXT_meshopt_compression (three.js: yes; Blender: no)
   // Decimate the seam-split mesh to about this many triangles (export/mesh_decimate.h) for a
   // streamable variant; 0 keeps the full resolution.

@@ -109,10 +109,10 @@ void ExpectRoundTrip(const GltfOptions& options) {
               return identity;
             }())));
   const double step = summary.position_step_m;
-  EXPECT_LT(step, 2e-5);
+  EXPECT_EQ(step, options.position_step_m);
   Mesh topology = sphere;
   for (int k = 0; k < 5; ++k) {
-    topology.vertices = frames[k];
+    topology.vertices = frames[options.per_frame_normals ? k : 0];  // else frame 0's are shared
     const RowMatrixX3d normals = VertexNormals(topology);
     for (int v = 0; v < summary.vertices; ++v) {
       const int s = glb.source_vertex[v];
@@ -149,7 +149,31 @@ void ExpectRoundTrip(const GltfOptions& options) {
 TEST(GltfWriter, RoundTripWithMeshoptCompression) {
   GltfOptions options;
   options.fps = 30.0;
+  options.position_step_m = 5e-5;
   ExpectRoundTrip(options);
+}
+
+TEST(GltfWriter, RoundTripWithSharedNormals) {
+  GltfOptions options;
+  options.per_frame_normals = false;
+  ExpectRoundTrip(options);
+}
+
+TEST(GltfWriter, PositionStepGrowsWhenInt16CannotSpanTheFrames) {
+  const Mesh sphere = TexturedSphere(4, 6);
+  GltfOptions options;
+  options.position_step_m = 1e-6;  // 65534 steps would span 6.5 cm; the frames span 1.3 m
+  GltfSummary summary;
+  const auto frames = SphereFrames(sphere, 6);
+  const GlbAnimation glb = DecodeGlb(EncodeGlb(sphere, frames, SphereTexture(0, 16, 8), options, &summary));
+  EXPECT_GT(summary.position_step_m, 1.5e-5);
+  EXPECT_LT(summary.position_step_m, 2.5e-5);
+  for (int k = 0; k < 6; ++k) {
+    for (int v = 0; v < summary.vertices; ++v) {
+      ASSERT_LE((glb.positions[k].row(v) - frames[k].row(glb.source_vertex[v])).cwiseAbs().maxCoeff(),
+                0.51 * summary.position_step_m + 1e-9);
+    }
+  }
 }
 
 TEST(GltfWriter, RoundTripQuantisedWithoutCompression) {
@@ -208,6 +232,9 @@ TEST(GltfWriter, RefusesBadInputs) {
   options = {};
   options.jpeg_quality = 0;
   testing::ExpectCheckRefuses(options, "jpeg_quality");
+  options = {};
+  options.position_step_m = 0.0;
+  testing::ExpectCheckRefuses(options, "position_step_m");
   testing::TempDir dir;
   EXPECT_THROW(WriteGlb("/proc/confluent-no/scene.glb", sphere, SphereFrames(sphere, 1), texture), OutputError);
   EXPECT_THROW(ReadGlb(dir / "missing.glb"), InputError);
