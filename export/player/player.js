@@ -11,6 +11,10 @@
 // width x height pixels (pixel (x, y) of the canvas is the OpenCV pixel centred at (x, y)),
 // pauses, hides its controls and sets window.playerReady = true once that frame is drawn with
 // the video's frame N as texture. window.playerError is set when something failed.
+//
+// Without a camera the page plays: orbit controls, play/pause and a timeline; each presented
+// video frame (requestVideoFrameCallback's mediaTime) selects its mesh frame. window.playerFrame
+// is the mesh frame shown, window.playerFps the scene's frame rate.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -143,6 +147,7 @@ async function main() {
 
   const extras = gltf.scene.userData || {};
   const fps = Number(extras.fps) || 25;
+  window.playerFps = fps;
   const frames = [];
   gltf.scene.traverse((node) => { if (/^frame_\d+$/.test(node.name)) frames.push(node); });
   frames.sort((a, b) => a.name.localeCompare(b.name));
@@ -160,6 +165,7 @@ async function main() {
     if (current >= 0) frames[current].visible = false;
     frames[k].visible = true;
     current = k;
+    window.playerFrame = k;
     timeline.value = String(k);
     frameText.textContent = `${k} / ${frames.length - 1}`;
   }
@@ -196,7 +202,6 @@ async function main() {
     }
     for (let i = 0; i < 3; ++i) { renderer.render(scene, camera); await nextAnimationFrame(); }
     renderer.render(scene, camera);
-    window.playerFrame = current;
     window.playerReady = true;
     return;
   }
@@ -228,7 +233,10 @@ async function main() {
   function setPlaying(on) {
     playing = on;
     playButton.textContent = on ? 'pause' : 'play';
-    if (texture) { if (on) video.play(); else video.pause(); }
+    if (texture && on) video.play();
+    // The paused clock may lag the frame last presented; park the video in the middle of the
+    // frame shown, so video, texture and mesh agree.
+    if (texture && !on) { video.pause(); video.currentTime = (current + 0.5) / fps; }
     clockStart = performance.now() / 1000 - current / fps;
   }
   playButton.addEventListener('click', () => setPlaying(!playing));

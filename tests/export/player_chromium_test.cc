@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/error.h"
@@ -96,40 +97,72 @@ double Iou(const Image& a, const Image& b, Image* intersection) {
   return either ? static_cast<double>(both) / either : 0.0;
 }
 
-TEST(PlayerInChromium, FrameFromAFixedCameraMatchesConfluentsRender) {
+// What the Chromium tests need: node, playwright-core from export/player's npm packages, Debian's
+// chromium ($CONFLUENT_CHROMIUM overrides) and ffmpeg; the reason when something is missing.
+struct Browser {
+  std::string chromium;
+  std::string modules;
+  std::string missing;
+};
+
+Browser FindBrowser() {
+  Browser browser;
   const char* chromium_env = std::getenv("CONFLUENT_CHROMIUM");
-  const std::string chromium = chromium_env ? chromium_env : "/usr/bin/chromium";
-  const std::string modules = testing::PlayerNodeModules("playwright-core");
-  if (!testing::NodeAvailable() || modules.empty() || std::system(("test -x '" + chromium + "'").c_str()) != 0) {
-    GTEST_SKIP() << "needs node, export/player/node_modules/playwright-core (npm ci --prefix export/player) and "
-                 << chromium << " (Debian's chromium; $CONFLUENT_CHROMIUM overrides)";
+  browser.chromium = chromium_env ? chromium_env : "/usr/bin/chromium";
+  browser.modules = testing::PlayerNodeModules("playwright-core");
+  if (!testing::NodeAvailable() || browser.modules.empty() ||
+      std::system(("test -x '" + browser.chromium + "'").c_str()) != 0) {
+    browser.missing = "needs node, export/player/node_modules/playwright-core (npm ci --prefix export/player) and " +
+                      browser.chromium + " (Debian's chromium; $CONFLUENT_CHROMIUM overrides)";
+  } else if (!FfmpegAvailable()) {
+    browser.missing = "ffmpeg is missing (the atlas video)";
   }
-  if (!FfmpegAvailable()) GTEST_SKIP() << "ffmpeg is missing (the atlas video)";
+  return browser;
+}
+
+// An export in `dir`: scene.glb of the moving sphere, atlas.mp4 (H.264, one atlas per frame)
+// and player/.
+struct SphereExport {
+  Mesh sphere = testing::TexturedSphere(24, 36);
+  std::vector<RowMatrixX3d> positions;
+
+  SphereExport(const std::string& dir, int frames) : positions(testing::SphereFrames(sphere, frames)) {
+    std::vector<Image> atlases;
+    for (int k = 0; k < frames; ++k) atlases.push_back(testing::SphereTexture(k));
+    WriteGlb(dir + "/scene.glb", sphere, positions, atlases[0]);
+    WriteVideo(dir + "/atlas.mp4", atlases);
+    WritePlayer(dir + "/player");
+  }
+};
+
+// Runs tests/export/<script> with node and returns its output (stdout and stderr).
+std::string RunNodeScript(const std::string& script, const std::vector<std::string>& args) {
+  std::string command = "node '" + testing::SourceRoot() + "/tests/export/" + script + "'";
+  for (const std::string& arg : args) command += " '" + arg + "'";
+  return testing::CaptureOutput(command + " 2>&1");
+}
+
+TEST(PlayerInChromium, FrameFromAFixedCameraMatchesConfluentsRender) {
+  const Browser found = FindBrowser();
+  if (!found.missing.empty()) GTEST_SKIP() << found.missing;
   std::unique_ptr<MeshRenderer> renderer;
   try {
     renderer = std::make_unique<MeshRenderer>();
   } catch (const std::exception& error) {
     GTEST_SKIP() << "no EGL context for confluent's render: " << error.what();
   }
-
-  // The export: scene.glb, atlas.mp4 (H.264, one atlas per frame) and player/.
-  const int frames = 6, shown = 3;
-  const Mesh sphere = testing::TexturedSphere(24, 36);
-  const std::vector<RowMatrixX3d> positions = testing::SphereFrames(sphere, frames);
-  std::vector<Image> atlases;
-  for (int k = 0; k < frames; ++k) atlases.push_back(testing::SphereTexture(k));
+  const int shown = 3;
   testing::TempDir dir;
-  WriteGlb(dir / "scene.glb", sphere, positions, atlases[0]);
-  WriteVideo(dir / "atlas.mp4", atlases);
-  WritePlayer(dir / "player");
+  const SphereExport scene(dir.path(), 6);
+  const Mesh& sphere = scene.sphere;
+  const std::vector<RowMatrixX3d>& positions = scene.positions;
 
   const Camera camera = testing::LookAtCamera(Eigen::Vector3d(0, 0.1, 0.15), Eigen::Vector3d(0.8, -1.0, 0.45));
   const std::string page = "player/index.html?" + CameraQuery(camera, shown);
   const std::string screenshot = dir / "screenshot.png";
-  const std::string report = testing::CaptureOutput(
-      "node '" + testing::SourceRoot() + "/tests/export/player_screenshot.cjs' '" + modules + "' '" + chromium + "' '" +
-      dir.path() + "' '" + page + "' " + std::to_string(camera.width) + " " + std::to_string(camera.height) + " '" +
-      screenshot + "' 60 2>&1");
+  const std::string report =
+      RunNodeScript("player_screenshot.cjs", {found.modules, found.chromium, dir.path(), page, std::to_string(camera.width),
+                                              std::to_string(camera.height), screenshot, "60"});
   ASSERT_NE(report.find("\"ready\": true"), std::string::npos) << report;
   EXPECT_NE(report.find("\"frame\": " + std::to_string(shown)), std::string::npos) << report;
   const Image browser = ReadImage(screenshot);
@@ -170,6 +203,29 @@ TEST(PlayerInChromium, FrameFromAFixedCameraMatchesConfluentsRender) {
     WriteImage(keep, browser);
     WriteImage(std::string(keep) + ".confluent.png", ours.color);
   }
+}
+
+// The interactive page: the mesh follows the playing video, stays on the video's frame when
+// paused, and the timeline moves both.
+TEST(PlayerInChromium, PlaysWithTheMeshFollowingTheVideo) {
+  const Browser found = FindBrowser();
+  if (!found.missing.empty()) GTEST_SKIP() << found.missing;
+  const int frames = 12, seek = 7;
+  testing::TempDir dir;
+  const SphereExport scene(dir.path(), frames);
+  const std::string output = RunNodeScript(
+      "player_interaction.cjs", {found.modules, found.chromium, dir.path(), "player/index.html", std::to_string(seek), "60"});
+  const nlohmann::json report = nlohmann::json::parse(output.substr(std::min(output.find('{'), output.size())), nullptr, false);
+  ASSERT_TRUE(report.is_object() && report.value("ok", false)) << output;
+  EXPECT_GE(report["frames_seen_playing"].size(), 4u) << output;
+  const nlohmann::json& paused = report["after_pause"];
+  const double fps = paused["fps"];
+  EXPECT_EQ(fps, 25.0);
+  EXPECT_TRUE(paused["paused"].get<bool>()) << output;
+  EXPECT_EQ(paused["frame"].get<int>(), static_cast<int>(std::floor(paused["time"].get<double>() * fps + 1e-3)) % frames) << output;
+  const nlohmann::json& seeked = report["after_seek"];
+  EXPECT_EQ(seeked["frame"].get<int>(), seek) << output;
+  EXPECT_NEAR(seeked["time"].get<double>(), (seek + 0.5) / fps, 0.5 / fps) << output;
 }
 
 }  // namespace
