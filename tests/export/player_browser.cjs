@@ -56,4 +56,31 @@ function diagnose(page) {
   }).catch((e) => String(e));
 }
 
-module.exports = { serveFolder, launchChromium, diagnose };
+// Serves `root`, opens `page_path` in Chromium at `viewport`, waits for window.playerReady (or
+// playerError), then awaits `body(page, report)`. Resolves to `report` ({url, console, ...};
+// report.error when something threw, with report.diagnosis); closes the browser and server.
+async function runPage({ modules, chromium, root, page_path, viewport, timeout_s }, body) {
+  const server = await serveFolder(root);
+  const report = { url: `http://127.0.0.1:${server.address().port}/${page_path}`, console: [] };
+  let browser = null;
+  let page = null;
+  try {
+    browser = await launchChromium(modules, chromium);
+    page = await (await browser.newContext({ viewport, deviceScaleFactor: 1 })).newPage();
+    page.on('console', (message) => report.console.push(`${message.type()}: ${message.text()}`));
+    page.on('pageerror', (error) => { report.page_error = error.message; });
+    await page.goto(report.url);
+    await page.waitForFunction(() => window.playerReady || window.playerError, null,
+                               { timeout: 1000 * Number(timeout_s || 60) });
+    await body(page, report);
+  } catch (error) {
+    report.error = String(error);
+    if (page) report.diagnosis = await diagnose(page);
+  } finally {
+    if (browser) await browser.close();
+    server.close();
+  }
+  return report;
+}
+
+module.exports = { runPage };

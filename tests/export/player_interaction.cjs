@@ -3,47 +3,31 @@
 // frame and video time after pressing pause, and after moving the timeline to frame <seek>.
 // Exits 1 when the page failed.
 //   node player_interaction.cjs <node_modules> <chromium> <served folder> <page path> <seek> [timeout_s]
-const { serveFolder, launchChromium, diagnose } = require('./player_browser.cjs');
+const { runPage } = require('./player_browser.cjs');
 const [modules, chromium, root, page_path, seek, timeout_s] = process.argv.slice(2);
 
 const state = () => ({ frame: window.playerFrame, fps: window.playerFps, time: document.getElementById('atlas').currentTime,
                        paused: document.getElementById('atlas').paused, error: window.playerError });
 
-(async () => {
-  const server = await serveFolder(root);
-  const report = { url: `http://127.0.0.1:${server.address().port}/${page_path}` };
-  let browser = null;
-  let page = null;
-  try {
-    browser = await launchChromium(modules, chromium);
-    page = await (await browser.newContext({ viewport: { width: 480, height: 360 } })).newPage();
-    page.on('pageerror', (error) => { report.page_error = error.message; });
-    await page.goto(report.url);
-    await page.waitForFunction(() => window.playerReady || window.playerError, null, { timeout: 1000 * Number(timeout_s || 60) });
-    const seen = new Set();
-    for (let i = 0; i < 60; ++i) {
-      seen.add(await page.evaluate(() => window.playerFrame));
-      await page.waitForTimeout(20);
-    }
-    report.frames_seen_playing = [...seen].sort((a, b) => a - b);
-    await page.click('#play');
-    await page.waitForTimeout(500);
-    report.after_pause = await page.evaluate(state);
-    await page.evaluate((k) => {
-      const timeline = document.getElementById('timeline');
-      timeline.value = String(k);
-      timeline.dispatchEvent(new Event('input'));
-    }, Number(seek));
-    await page.waitForTimeout(500);
-    report.after_seek = await page.evaluate(state);
-    report.ok = !report.after_seek.error && !report.page_error;
-  } catch (error) {
-    report.error = String(error);
-    if (page) report.diagnosis = await diagnose(page);
-  } finally {
-    if (browser) await browser.close();
-    server.close();
+runPage({ modules, chromium, root, page_path, viewport: { width: 480, height: 360 }, timeout_s }, async (page, report) => {
+  const seen = new Set();
+  for (let i = 0; i < 60; ++i) {
+    seen.add(await page.evaluate(() => window.playerFrame));
+    await page.waitForTimeout(20);
   }
+  report.frames_seen_playing = [...seen].sort((a, b) => a - b);
+  await page.click('#play');
+  await page.waitForTimeout(500);
+  report.after_pause = await page.evaluate(state);
+  await page.evaluate((k) => {
+    const timeline = document.getElementById('timeline');
+    timeline.value = String(k);
+    timeline.dispatchEvent(new Event('input'));
+  }, Number(seek));
+  await page.waitForTimeout(500);
+  report.after_seek = await page.evaluate(state);
+  report.ok = !report.after_seek.error && !report.page_error;
+}).then((report) => {
   console.log(JSON.stringify(report, null, 1));
-  process.exit(report.ok ? 0 : 1);
-})();
+  process.exit(report.ok && !report.error ? 0 : 1);
+});
