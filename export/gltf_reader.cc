@@ -177,6 +177,12 @@ GlbAnimation DecodeGlb(const std::vector<std::uint8_t>& glb, const std::string& 
     decoder.Fail(std::string("not a confluent glTF layout: ") + error.what());
   }
   if (out.positions.empty()) decoder.Fail("no frame nodes under the scan node");
+  if (out.faces.size() > 0 && (out.faces.minCoeff() < 0 || out.faces.maxCoeff() >= out.uvs.rows())) {
+    decoder.Fail("a triangle index is out of range");
+  }
+  if (!out.source_vertex.empty() && static_cast<Eigen::Index>(out.source_vertex.size()) != out.uvs.rows()) {
+    decoder.Fail("the source vertex accessor's count differs from the vertex count");
+  }
   return out;
 }
 

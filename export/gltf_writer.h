@@ -25,8 +25,10 @@
 // the centre; the scan node's translation and scale map them to metres), normals int8
 // normalised, UVs uint16 normalised (float when a UV lies outside [0, 1]). Optionally
 // EXT_meshopt_compression (meshoptimizer's vertex and index codecs) on every vertex and index
-// stream: three.js reads it with its MeshoptDecoder; Blender's importer (4.x) does not, so
-// GltfOptions::meshopt_compression = false writes a quantised file without it. When used, the
+// stream: three.js reads it with its MeshoptDecoder; Blender's importer does not (3.4, Debian
+// 12's, refuses the file), so GltfOptions::meshopt_compression = false writes a quantised file
+// without it, which Blender imports and plays (one object per frame; glTF time t is Blender
+// frame t * fps, from frame 0). When used, the
 // extension is listed as required, as the file carries no uncompressed fallback. The base colour is an embedded JPEG or PNG on an unlit
 // material (KHR_materials_unlit): the atlas already holds the captured light.
 

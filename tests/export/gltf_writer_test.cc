@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "core/error.h"
+#include "export/gltf_format.h"
 #include "export/gltf_reader.h"
 #include "export/gltf_writer.h"
 #include "export/mesh_decimate.h"
@@ -21,6 +23,7 @@ namespace {
 using testing::SphereFrames;
 using testing::SphereTexture;
 using testing::TexturedSphere;
+using gltf::FrameName;
 
 // The UVs each scan vertex has at its corners.
 std::vector<std::vector<Eigen::Vector2d>> CornerUvs(const Mesh& mesh) {
@@ -266,6 +269,44 @@ TEST(GltfWriter, KhronosValidatorReportsNoErrors) {
       EXPECT_NE(report.find("exit=0"), std::string::npos) << report;
     }
   }
+}
+
+// Blender's glTF importer (when Blender is installed; CI does not install it) imports the
+// quantised file without meshopt compression and plays it: one object per frame, exactly one
+// visible at each Blender frame, standing upright (Z up). Blender 3.4's importer cannot read
+// EXT_meshopt_compression, hence GltfOptions::meshopt_compression = false for Blender.
+TEST(GltfWriter, BlenderImportsAndPlaysTheUncompressedFile) {
+  if (std::system("blender --version >/dev/null 2>&1") != 0) GTEST_SKIP() << "blender is not installed";
+  const Mesh sphere = TexturedSphere();
+  const std::vector<RowMatrixX3d> frames = SphereFrames(sphere, 4);
+  testing::TempDir dir;
+  const auto import = [&](bool compress) {
+    GltfOptions options;
+    options.meshopt_compression = compress;
+    WriteGlb(dir / "scene.glb", sphere, frames, SphereTexture(0), options);
+    const std::string output = testing::CaptureOutput("blender -b --factory-startup --python '" + testing::SourceRoot() +
+                                                      "/tests/export/gltf_blender_check.py' -- '" + (dir / "scene.glb") +
+                                                      "' 25 2>&1");
+    const std::size_t line = output.rfind("\n{");  // the report's line
+    const std::string text = line == std::string::npos ? "" : output.substr(line + 1, output.find('\n', line + 1) - line - 1);
+    const nlohmann::json report = nlohmann::json::parse(text, nullptr, false);
+    EXPECT_TRUE(report.is_object()) << output;
+    return report.is_object() ? report : nlohmann::json::object();
+  };
+  const nlohmann::json plain = import(false);
+  ASSERT_TRUE(plain.contains("import")) << plain.dump();
+  ASSERT_EQ(plain["frames"].size(), 4u) << plain.dump();
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_EQ(plain["visible"][k], nlohmann::json::array({FrameName(k)})) << plain.dump();
+    EXPECT_EQ(plain["uv_layers"][k], 1);
+  }
+  const Eigen::Vector3d lo = frames[0].colwise().minCoeff(), hi = frames[0].colwise().maxCoeff();
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(plain["frame0_min"][a].get<double>(), lo[a], 1e-3) << plain.dump();
+    EXPECT_NEAR(plain["frame0_max"][a].get<double>(), hi[a], 1e-3) << plain.dump();
+  }
+  const nlohmann::json compressed = import(true);
+  EXPECT_NE(compressed.value("import_error", "").find("EXT_meshopt_compression"), std::string::npos) << compressed.dump();
 }
 
 }  // namespace
