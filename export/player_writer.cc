@@ -1,6 +1,7 @@
 #include "export/player_writer.h"
 
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -25,6 +26,18 @@ std::vector<std::string> WritePlayer(const std::string& dir, const PlayerOptions
   WriteTextFile(dir + "/config.json", config.dump(1) + "\n");
   written.push_back("config.json");
   return written;
+}
+
+std::string PlayerCameraQuery(const Camera& camera, int frame) {
+  if (frame < 0) throw UsageError("PlayerCameraQuery: frame " + std::to_string(frame) + " must be >= 0");
+  std::ostringstream query;
+  query.precision(17);
+  query << "fx=" << camera.K(0, 0) << "&fy=" << camera.K(1, 1) << "&cx=" << camera.K(0, 2) << "&cy=" << camera.K(1, 2)
+        << "&width=" << camera.width << "&height=" << camera.height << "&R=";
+  for (int i = 0; i < 9; ++i) query << (i ? "," : "") << camera.rotation(i / 3, i % 3);
+  query << "&t=" << camera.translation.x() << "," << camera.translation.y() << "," << camera.translation.z()
+        << "&frame=" << frame;
+  return query.str();
 }
 
 }  // namespace confluent

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "calib/camera.h"
+
 namespace confluent {
 
 struct PlayerOptions {
@@ -24,5 +26,12 @@ struct PlayerOptions {
 // Returns the paths written, relative to `dir`. Throws UsageError for bad options and
 // OutputError naming the file that could not be written.
 std::vector<std::string> WritePlayer(const std::string& dir, const PlayerOptions& options = {});
+
+// The query string (without '?') that makes player/index.html render frame `frame` from
+// `camera` at its resolution, pause and set window.playerReady: fx, fy, cx, cy, width, height,
+// R (row-major) and t of the cam_from_world transform, and frame, at full double precision.
+// The page renders an ideal pinhole: lens distortion and skew are not applied. Throws
+// UsageError for a negative frame.
+std::string PlayerCameraQuery(const Camera& camera, int frame);
 
 }  // namespace confluent

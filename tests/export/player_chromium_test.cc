@@ -57,19 +57,16 @@ TEST(PlayerWriter, WritesTheEmbeddedFilesByteForByte) {
   EXPECT_NE(config.find("\"../atlas.webm\""), std::string::npos) << config;
   options.scene_url.clear();
   EXPECT_THROW(WritePlayer(dir / "other", options), UsageError);
+  Camera camera;
+  camera.width = 64;
+  camera.height = 48;
+  camera.K << 50, 0, 31.5, 0, 51, 23.25, 0, 0, 1;
+  camera.translation << 0.1, -0.2, 3.0;
+  EXPECT_EQ(PlayerCameraQuery(camera, 7),
+            "fx=50&fy=51&cx=31.5&cy=23.25&width=64&height=48&R=1,0,0,0,1,0,0,0,1"
+            "&t=0.10000000000000001,-0.20000000000000001,3&frame=7");
+  EXPECT_THROW(PlayerCameraQuery(camera, -1), UsageError);
   EXPECT_THROW(WritePlayer("/proc/confluent-no/player"), OutputError);
-}
-
-// The page's query for a fixed camera and frame.
-std::string CameraQuery(const Camera& camera, int frame) {
-  std::ostringstream query;
-  query.precision(17);
-  query << "fx=" << camera.K(0, 0) << "&fy=" << camera.K(1, 1) << "&cx=" << camera.K(0, 2) << "&cy=" << camera.K(1, 2)
-        << "&width=" << camera.width << "&height=" << camera.height << "&R=";
-  for (int i = 0; i < 9; ++i) query << (i ? "," : "") << camera.rotation(i / 3, i % 3);
-  query << "&t=" << camera.translation.x() << "," << camera.translation.y() << "," << camera.translation.z()
-        << "&frame=" << frame;
-  return query.str();
 }
 
 // Pixels brighter than the black background (the textures have no texel below 28).
@@ -158,7 +155,7 @@ TEST(PlayerInChromium, FrameFromAFixedCameraMatchesConfluentsRender) {
   const std::vector<RowMatrixX3d>& positions = scene.positions;
 
   const Camera camera = testing::LookAtCamera(Eigen::Vector3d(0, 0.1, 0.15), Eigen::Vector3d(0.8, -1.0, 0.45));
-  const std::string page = "player/index.html?" + CameraQuery(camera, shown);
+  const std::string page = "player/index.html?" + PlayerCameraQuery(camera, shown);
   const std::string screenshot = dir / "screenshot.png";
   const std::string report =
       RunNodeScript("player_screenshot.cjs", {found.modules, found.chromium, dir.path(), page, std::to_string(camera.width),
