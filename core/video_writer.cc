@@ -165,7 +165,9 @@ VideoWriter::VideoWriter(const std::string& path, int width_px, int height_px, c
   // A socket instead of a pipe: send(MSG_NOSIGNAL) reports a dead reader as an error instead
   // of raising SIGPIPE in the whole process.
   int fds[2];
-  if (socketpair(AF_UNIX, SOCK_STREAM, 0, fds) != 0)
+  // Close-on-exec: another writer's ffmpeg must not inherit this socket, or this ffmpeg never
+  // sees the end of its input while the other one runs (two videos written at once hang).
+  if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0)
     throw OutputError(path, std::string("cannot create a socket for ffmpeg: ") + std::strerror(errno));
   const std::string ffmpeg = FfmpegExecutable(options);
   char fps_text[32];

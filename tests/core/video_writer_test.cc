@@ -2,9 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <future>
 #include <string>
 
 #include "core/error.h"
@@ -63,6 +65,29 @@ TEST(VideoWriter, WritesH264Mp4WithExpectedFramesAndDuration) {
   EXPECT_NEAR(frame.at<std::uint8_t>(40, 30, 1), 100, 4);
   EXPECT_GT(frame.at<std::uint8_t>(4, 4, 0), 200);
   EXPECT_LT(frame.at<std::uint8_t>(4, 4, 1), 50);
+}
+
+TEST(VideoWriter, TwoVideosWrittenAtOnceEachCloseWhileTheOtherIsOpen) {
+  if (!FfmpegAvailable()) GTEST_SKIP() << "ffmpeg is not installed";
+  testing::TempDir dir;
+  VideoWriter first(dir / "first.mp4", 64, 48);
+  VideoWriter second(dir / "second.mp4", 32, 32);
+  for (int k = 0; k < 3; ++k) {
+    first.Write(TestFrame(64, 48, k));
+    second.Write(TestFrame(32, 32, k));
+  }
+  // The second ffmpeg once inherited the first one's input socket, so closing the first waited
+  // for ever. A hang here fails the test after a minute instead of blocking the suite.
+  std::future<void> closing = std::async(std::launch::async, [&] { first.Close(); });
+  if (closing.wait_for(std::chrono::seconds(60)) != std::future_status::ready) {
+    ADD_FAILURE() << "closing the first video hangs while the second is open";
+    std::fflush(nullptr);
+    std::_Exit(1);
+  }
+  closing.get();
+  EXPECT_EQ(VideoReader(dir / "first.mp4").num_frames(), 3);
+  second.Close();
+  EXPECT_EQ(VideoReader(dir / "second.mp4").num_frames(), 3);
 }
 
 TEST(VideoWriter, OddSizeIsPaddedAndGreyIsAccepted) {
