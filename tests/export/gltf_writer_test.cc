@@ -216,6 +216,16 @@ TEST(GltfWriter, DecimatedVariantAnimatesFromTheFullMeshPositions) {
   ExpectPositionsWithinHalfAStep(glb, frames, summary.position_step_m);
 }
 
+TEST(GltfWriter, UvsOutsideTheUnitSquareStayFloat) {
+  Mesh sphere = TexturedSphere(6, 8);
+  sphere.uvs = sphere.uvs * 2.0 - RowMatrixX2d::Constant(sphere.uvs.rows(), 2, 0.25);  // tiled: [-0.25, 1.75]
+  const GlbAnimation glb = DecodeGlb(EncodeGlb(sphere, SphereFrames(sphere, 2), SphereTexture(0, 16, 8)));
+  const auto corner_uvs = CornerUvs(sphere);
+  for (int v = 0; v < glb.uvs.rows(); ++v) {
+    EXPECT_LT(DistanceToNearest(glb.uvs.row(v).transpose(), corner_uvs[glb.source_vertex[v]]), 1e-6);
+  }
+}
+
 TEST(GltfWriter, RefusesBadInputs) {
   const Mesh sphere = TexturedSphere(4, 6);
   std::vector<RowMatrixX3d> frames = SphereFrames(sphere, 2);
