@@ -22,5 +22,6 @@ CommandSpec MakeRunCommand();            // cmd_run.cc
 CommandSpec MakeEvaluateCommand();       // cmd_evaluate.cc
 CommandSpec MakeViewCommand();           // cmd_view.cc
 CommandSpec MakeRenderCommand();         // cmd_render.cc
+CommandSpec MakeExportCommand();         // cmd_export.cc
 
 }  // namespace confluent::app

@@ -32,6 +32,7 @@ std::vector<CommandSpec> AllCommands() {
       MakeEvaluateCommand(),
       MakeViewCommand(),
       MakeRenderCommand(),
+      MakeExportCommand(),
   };
 }
 

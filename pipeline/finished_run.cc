@@ -54,4 +54,35 @@ std::vector<std::string> TexturingExclusions(const FinishedRun& run, const Rig& 
   return excluded;
 }
 
+TexturingCameras SelectTexturingCameras(const FinishedRun& run, const Rig& rig, const std::vector<std::string>& excluded,
+                                        bool texture_from_held_out, std::string* warning) {
+  const std::vector<std::string> all_excluded = TexturingExclusions(run, rig, excluded, texture_from_held_out, warning);
+  TexturingCameras result;
+  for (int c = 0; c < rig.size(); ++c)
+    if (std::find(all_excluded.begin(), all_excluded.end(), rig.cameras[c].name) == all_excluded.end()) {
+      result.indices.push_back(c);
+      result.cameras.push_back(rig.cameras[c]);
+    }
+  return result;
+}
+
+void ReadTexturingFrame(const FinishedRun& run, const Capture& capture, const TexturingCameras& cameras, int frame,
+                        std::vector<Image>* images, std::vector<Image>* masks) {
+  images->clear();
+  masks->clear();
+  bool any_mask = false;
+  for (int c : cameras.indices) {
+    images->push_back(capture.ReadFrame(c, frame));
+    const std::string run_mask = run.folder.MaskPath(capture.rig().cameras[c].name, frame);
+    if (std::filesystem::exists(run_mask))
+      masks->push_back(ReadMaskFile(run_mask));
+    else if (capture.has_masks() && std::filesystem::exists(capture.MaskPath(c, frame)))
+      masks->push_back(capture.ReadMask(c, frame));
+    else
+      masks->push_back(Image());
+    any_mask = any_mask || !masks->back().empty();
+  }
+  if (!any_mask) masks->clear();
+}
+
 }  // namespace confluent

@@ -7,6 +7,8 @@
 #include <vector>
 
 #include "calib/camera.h"
+#include "calib/capture.h"
+#include "core/image.h"
 #include "pipeline/run_folder.h"
 #include "pipeline/run_manifest.h"
 
@@ -34,5 +36,21 @@ FinishedRun OpenFinishedRun(const std::string& root, const std::string& capture_
 // is textured from cameras the run held out.
 std::vector<std::string> TexturingExclusions(const FinishedRun& run, const Rig& rig, std::vector<std::string> excluded,
                                              bool texture_from_held_out, std::string* warning);
+
+// The cameras that texture a view of the run (TexturingExclusions' complement), in rig order.
+struct TexturingCameras {
+  std::vector<int> indices;      // into the rig
+  std::vector<Camera> cameras;   // copies, for ProjectiveTexturer::SetFrame
+};
+
+// TexturingExclusions, returned as the cameras that remain. Throws as it does.
+TexturingCameras SelectTexturingCameras(const FinishedRun& run, const Rig& rig, const std::vector<std::string>& excluded,
+                                        bool texture_from_held_out, std::string* warning);
+
+// The images of `frame` from the texturing cameras, and their masks: the run's (RUN/masks/),
+// else the capture's, else an empty Image; `masks` is left empty when no camera has one.
+// Throws InputError naming an unreadable file.
+void ReadTexturingFrame(const FinishedRun& run, const Capture& capture, const TexturingCameras& cameras, int frame,
+                        std::vector<Image>* images, std::vector<Image>* masks);
 
 }  // namespace confluent

@@ -88,16 +88,11 @@ NovelViewSummary RenderNovelViews(const FinishedRun& finished, const Capture& ca
 
   // Texturing cameras: never the ones the run held out, unless asked.
   std::string held_out_warning;
-  const std::vector<std::string> excluded =
-      TexturingExclusions(finished, rig, options.excluded, options.texture_from_held_out, &held_out_warning);
+  const TexturingCameras texturing =
+      SelectTexturingCameras(finished, rig, options.excluded, options.texture_from_held_out, &held_out_warning);
   if (!held_out_warning.empty()) summary.warnings.push_back(held_out_warning);
-  std::vector<int> used;
-  std::vector<Camera> used_cameras;
-  for (int c = 0; c < rig.size(); ++c)
-    if (std::find(excluded.begin(), excluded.end(), rig.cameras[c].name) == excluded.end()) {
-      used.push_back(c);
-      used_cameras.push_back(rig.cameras[c]);
-    }
+  const std::vector<int>& used = texturing.indices;
+  const std::vector<Camera>& used_cameras = texturing.cameras;
 
   // Geometry present in the run.
   auto mesh_path = [&](int frame) { return geometry == "scan" ? run.ScanPath(frame) : run.TemplatePath(frame); };
@@ -205,14 +200,6 @@ NovelViewSummary RenderNovelViews(const FinishedRun& finished, const Capture& ca
                                  " (no clean plate, or no floor both see)");
   }
 
-  // Masks: the run's, else the capture's.
-  auto mask_for = [&](int camera, int frame) -> Image {
-    const std::string run_mask = run.MaskPath(rig.cameras[camera].name, frame);
-    if (fs::exists(run_mask)) return ReadMaskFile(run_mask);
-    if (capture.has_masks() && fs::exists(capture.MaskPath(camera, frame))) return capture.ReadMask(camera, frame);
-    return Image();
-  };
-
   ProjectiveTexturer texturer(reference, options.texturing);
   const std::string view_dir = (fs::path(out_dir) / view).string();
   std::unique_ptr<VideoWriter> video;
@@ -233,13 +220,7 @@ NovelViewSummary RenderNovelViews(const FinishedRun& finished, const Capture& ca
       if (mesh.num_vertices() != reference.num_vertices() || mesh.faces != reference.faces)
         throw InputError(mesh_path(entry.frame), "topology differs from " + mesh_path(present.front()));
       std::vector<Image> images, masks;
-      bool any_mask = false;
-      for (int c : used) {
-        images.push_back(capture.ReadFrame(c, entry.frame));
-        masks.push_back(mask_for(c, entry.frame));
-        any_mask = any_mask || !masks.back().empty();
-      }
-      if (!any_mask) masks.clear();
+      ReadTexturingFrame(finished, capture, texturing, entry.frame, &images, &masks);
       const double start = NowSeconds();
       texturer.SetFrame(mesh.vertices, used_cameras, images, masks);
       if (!plate_gains.empty()) texturer.SetViewGains(plate_gains);
