@@ -29,6 +29,7 @@ int RunExport(const ParsedArgs& args, const Context& context) {
   options.stream_triangles = args.get_int("decimate", 0);
   options.stream_atlas_px = args.get_int("stream-atlas-size", std::min(options.stream_atlas_px, options.atlas.size_px));
   options.video.crf = args.get_int("crf", options.video.crf);
+  options.stream_crf = args.get_int("stream-crf", options.stream_crf);
   options.fps = args.get_double("fps", 0.0);
   if (args.has("fps") && !(options.fps > 0.0)) throw UsageError("--fps: must be > 0");
   options.gltf.meshopt_compression = !args.has("no-meshopt");
@@ -95,7 +96,8 @@ CommandSpec MakeExportCommand() {
       {"atlas-size", "PX", "atlas width and height (default 2048)"},
       {"decimate", "N", "also write DIR/stream/ with the mesh decimated to about N triangles"},
       {"stream-atlas-size", "PX", "the stream variant's atlas size (default 1024)"},
-      {"crf", "N", "H.264 quality of the atlas videos, 0..51 (default 18)"},
+      {"crf", "N", "H.264 quality of the atlas video, 0..51 (default 18)"},
+      {"stream-crf", "N", "H.264 quality of the stream variant's atlas video (default 23)"},
       {"fps", "F", "frame rate of the videos and the animation (default: the run's, else 25)"},
       {"no-meshopt", "", "write scene.glb without EXT_meshopt_compression (larger; Blender imports it)"},
       {"no-player", "", "do not write the web player"},

@@ -106,6 +106,7 @@ void ExportOptions::Check() const {
   video.Check();
   texturing.Check();
   if (!(fps >= 0.0)) throw UsageError("ExportOptions.fps must be >= 0 (0 = the run's)");
+  if (stream_crf < 0 || stream_crf > 51) throw UsageError("ExportOptions.stream_crf must be within 0..51");
   if (stream_triangles < 0) throw UsageError("ExportOptions.stream_triangles must be >= 0 (0 = no stream variant)");
   if (stream_atlas_px < 64 || stream_atlas_px > atlas.size_px)
     throw UsageError("ExportOptions.stream_atlas_px = " + std::to_string(stream_atlas_px) +
@@ -161,8 +162,10 @@ ExportSummary ExportRun(const FinishedRun& finished, const Capture& capture, con
   std::unique_ptr<StreamWriter> stream;
   if (options.stream_triangles > 0) {
     fs::create_directories(fs::path(out_dir) / "stream");
+    VideoWriterOptions stream_video = video_options;
+    stream_video.crf = options.stream_crf;
     stream = std::make_unique<StreamWriter>((fs::path(out_dir) / "stream").string(), options.stream_atlas_px,
-                                            video_options);
+                                            stream_video);
   }
   std::unique_ptr<PointCacheWriter> cache;
   if (options.pc2) {
