@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <optional>
 
 #include "calib/plate_colour.h"
@@ -13,6 +14,7 @@
 #include "core/image_io.h"
 #include "core/image_metrics.h"
 #include "core/mesh_io.h"
+#include "pipeline/evaluation_atlas.h"
 #include "pipeline/plot.h"
 #include "render/composite.h"
 
@@ -108,6 +110,16 @@ std::string Csv(double v) {
   return text;
 }
 
+// The images and (where the run has them) masks of cameras `used` at `frame`.
+void ReadInputs(const Capture& capture, const RunFolder& run, const std::vector<int>& used, int frame,
+                std::vector<Image>* images, std::vector<Image>* masks) {
+  for (int c : used) {
+    images->push_back(capture.ReadFrame(c, frame));
+    const std::string mask = run.MaskPath(capture.rig().cameras[c].name, frame);
+    masks->push_back(fs::exists(mask) ? ReadMaskFile(mask) : Image());
+  }
+}
+
 // Mean vertex distance between two meshes of the same vertex count.
 double MeanVertexError(const Mesh& a, const Mesh& b) { return (a.vertices - b.vertices).rowwise().norm().mean(); }
 
@@ -118,6 +130,8 @@ void EvaluationOptions::Check() const {
                 edge_softness_px, "in [0, 5] pixels");
   RequireOption(every >= 1, "EvaluationOptions.every", every, ">= 1");
   RequireOption(side_by_side_every >= 0, "EvaluationOptions.side_by_side_every", side_by_side_every, ">= 0");
+  RequireOption(atlas_size_px >= 64 && atlas_size_px <= 16384, "EvaluationOptions.atlas_size_px", atlas_size_px,
+                "in [64, 16384]");
   texturing.Check();
 }
 
@@ -214,7 +228,31 @@ EvaluationSummary EvaluateRun(const FinishedRun& finished, const Capture& captur
                                            std::to_string(missing.front()));
 
   std::optional<ProjectiveTexturer> scan_texturer, template_texturer;
-  if (has_scan) {
+  const bool atlas = options.texture == EvaluationOptions::Texture::kAtlas && has_scan;
+  std::unique_ptr<AtlasTexturedScan> atlas_scan;  // kAtlas: baked before the scoring loop
+  std::vector<int> atlas_index(frames.size(), -1);
+  std::string atlas_description;
+  if (atlas) {
+    AtlasTexturingOptions atlas_options;
+    atlas_options.atlas_size_px = options.atlas_size_px;
+    atlas_options.supersampling = options.atlas_supersampling;
+    atlas_options.texturing = texture_options;
+    if (finished.fps() > 0) atlas_options.video.fps = finished.fps();
+    std::vector<std::string> view_names;
+    for (int c : heldout) view_names.push_back(rig.cameras[c].name);
+    atlas_scan = std::make_unique<AtlasTexturedScan>(ReadMesh(run.ScanPath(range.first)), view_names,
+                                                     run.Path("evaluation"), atlas_options);
+    atlas_description = DescribeAtlasTexturing(atlas_options, atlas_scan->stats());
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      if (!fs::exists(run.ScanPath(frames[i]))) continue;
+      std::vector<Image> images, masks;
+      ReadInputs(capture, run, used, frames[i], &images, &masks);
+      atlas_index[i] = atlas_scan->Bake(ReadMesh(run.ScanPath(frames[i])).vertices, used_cameras, images, masks,
+                                        match_colour ? view_gains : std::vector<std::vector<Eigen::Vector3d>>());
+      ReportProgress(progress, "bake atlas", static_cast<int>(i) + 1, frames.size(), "frame " + std::to_string(frames[i]));
+    }
+    atlas_scan->FinishBaking();
+  } else if (has_scan) {
     const Mesh first = ReadMesh(run.ScanPath(range.first));
     scan_texturer.emplace(first, texture_options);
   }
@@ -225,20 +263,17 @@ EvaluationSummary EvaluateRun(const FinishedRun& finished, const Capture& captur
   std::vector<Image> error_sum(heldout.size());
   std::vector<int> error_count(heldout.size(), 0);
   int done = 0;
-  for (int frame : frames) {
+  for (std::size_t frame_index = 0; frame_index < frames.size(); ++frame_index) {
+    const int frame = frames[frame_index];
     std::vector<Image> images, masks;
-    for (int c : used) {
-      images.push_back(capture.ReadFrame(c, frame));
-      const std::string mask = run.MaskPath(rig.cameras[c].name, frame);
-      masks.push_back(fs::exists(mask) ? ReadMaskFile(mask) : Image());
-    }
+    ReadInputs(capture, run, used, frame, &images, &masks);
     const Mesh templ = ReadMesh(run.TemplatePath(frame));
     template_texturer->SetFrame(templ.vertices, used_cameras, images, masks);
     std::optional<Mesh> scan;
     double vertex_error = NAN;
     if (has_scan && fs::exists(run.ScanPath(frame))) {
       scan = ReadMesh(run.ScanPath(frame));
-      scan_texturer->SetFrame(scan->vertices, used_cameras, images, masks);
+      if (!atlas) scan_texturer->SetFrame(scan->vertices, used_cameras, images, masks);
       const fs::path gt = fs::path(gt_meshes) / (FrameStem(frame) + ".ply");
       if (!gt_meshes.empty()) {
         if (!fs::exists(gt)) throw InputError(gt.string(), "ground-truth mesh not found");
@@ -267,8 +302,13 @@ EvaluationSummary EvaluateRun(const FinishedRun& finished, const Capture& captur
       row.templ = Score(rendered_template, real, truth, &region);
       std::optional<RenderResult> rendered_scan;
       if (scan) {
-        if (match_colour) scan_texturer->SetViewGains(view_gains[h]);
-        rendered_scan = seen_over_background(scan_texturer->Render(camera, true), h);
+        if (atlas) {
+          rendered_scan = seen_over_background(
+              atlas_scan->Render(static_cast<int>(h), atlas_index[frame_index], scan->vertices, camera), h);
+        } else {
+          if (match_colour) scan_texturer->SetViewGains(view_gains[h]);
+          rendered_scan = seen_over_background(scan_texturer->Render(camera, true), h);
+        }
         row.scan = Score(*rendered_scan, real, truth, &region);
       }
       const RenderResult& best = rendered_scan ? *rendered_scan : rendered_template;
@@ -334,6 +374,7 @@ EvaluationSummary EvaluateRun(const FinishedRun& finished, const Capture& captur
   summary.colour_matched = match_colour;
   summary.edge_softness_px = over_plates ? edge_softness : 0.0;
   summary.texturing = DescribeTextureOptions(texture_options);
+  if (atlas) summary.texturing = "scan: " + atlas_description + ", baked with " + summary.texturing;
   summary.scan = {Mean(scan_iou), Min(scan_iou),   Mean(scan_xor),    Mean(scan_psnr),
                   Mean(scan_ssim), Mean(scan_box), Mean(scan_inside), Mean(scan_share)};
   summary.templ = {Mean(template_iou),  Min(template_iou),  Mean(template_xor),    Mean(template_psnr),

@@ -26,6 +26,13 @@ struct EvaluationOptions {
   int every = 1;                      // score every N-th frame
   int side_by_side_every = 10;        // side-by-side pictures every N scored frames (0: none)
   ProjectiveTextureOptions texturing;
+  // How the scan is textured: kProjective renders the projective texture directly (the default);
+  // kAtlas bakes it into a UV atlas per frame, through an H.264 round trip, and renders the
+  // atlas-textured scan (pipeline/evaluation_atlas.h; the template stays projective).
+  enum class Texture { kProjective, kAtlas };
+  Texture texture = Texture::kProjective;
+  int atlas_size_px = 2048;  // kAtlas: the atlas's width and height
+  int atlas_supersampling = 4;  // kAtlas: colour samples per pixel and axis (AtlasTexturingOptions)
 
   void Check() const;  // throws UsageError naming an invalid field and its value
 };

@@ -214,6 +214,14 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
   EXPECT_EQ(nearest["texturing"], "best 1 camera, feather 8 px, no colour balance");
   EXPECT_GT(std::abs(nearest["scan"]["psnr_inside_db_mean"].get<double>() - metrics["scan"]["psnr_inside_db_mean"].get<double>()), 1e-6);
   EXPECT_EQ(nearest["scan"]["iou_mean"], metrics["scan"]["iou_mean"]);
+  // The scan from its baked UV atlas, through H.264: the same outline (MeshRenderer instead of the
+  // texturer's rasteriser), colours close to the projective ones; the template is untouched.
+  const nlohmann::json atlas = evaluate_with({"--texture", "atlas", "--atlas-size", "256", "--atlas-samples", "2"});
+  EXPECT_EQ(atlas["texturing"].get<std::string>().rfind("scan: atlas 256 px", 0), 0u) << atlas["texturing"];
+  EXPECT_NEAR(atlas["scan"]["iou_mean"].get<double>(), metrics["scan"]["iou_mean"].get<double>(), 5e-3);
+  EXPECT_GT(atlas["scan"]["psnr_inside_db_mean"].get<double>(), metrics["scan"]["psnr_inside_db_mean"].get<double>() - 3.0);
+  EXPECT_EQ(atlas["template"], metrics["template"]);
+  EXPECT_TRUE(fs::exists(run + "/evaluation/atlas_holdout0.mp4"));
 }
 
 // A chain of runs in one folder, each killed (SIGKILL, through the CONFLUENT_KILL_AT hook of
