@@ -13,6 +13,7 @@
 #include "core/image.h"
 #include "core/mesh.h"
 #include "core/mesh_ops.h"
+#include "tests/export/player_test_tools.h"
 
 namespace confluent::testing {
 
@@ -92,22 +93,5 @@ inline Camera LookAtCamera(const Eigen::Vector3d& target, const Eigen::Vector3d&
   camera.K(1, 2) = 131.25;
   return camera;
 }
-
-// The checkout's root, from this file's path (tests/export/).
-inline std::string SourceRoot() {
-  std::string path = __FILE__;
-  for (int i = 0; i < 3; ++i) path = path.substr(0, path.find_last_of('/'));
-  return path;
-}
-
-// export/player/node_modules of the checkout ("" when `package` is not installed there).
-inline std::string PlayerNodeModules(const std::string& package) {
-  const std::string modules = SourceRoot() + "/export/player/node_modules";
-  const std::string probe = modules + "/" + package + "/package.json";
-  return std::system(("test -f '" + probe + "'").c_str()) == 0 ? modules : "";
-}
-
-// Whether `node` runs.
-inline bool NodeAvailable() { return std::system("node --version >/dev/null 2>&1") == 0; }
 
 }  // namespace confluent::testing

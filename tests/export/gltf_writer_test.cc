@@ -15,6 +15,7 @@
 #include "export/mesh_decimate.h"
 #include "export/seam_split.h"
 #include "tests/export/gltf_test_scene.h"
+#include "tests/export/player_test_tools.h"
 #include "tests/support/test_support.h"
 
 namespace confluent {
@@ -257,8 +258,7 @@ TEST(GltfWriter, RefusesBadInputs) {
 // EXT_meshopt_compression (an info message), so the uncompressed file is the one whose data it
 // checks (accessor bounds, unit normals, index ranges, animation times).
 TEST(GltfWriter, KhronosValidatorReportsNoErrors) {
-  const std::string modules = testing::PlayerNodeModules("gltf-validator");
-  if (!testing::NodeAvailable() || modules.empty()) {
+  if (testing::ValidateGltf("").empty()) {
     GTEST_SKIP() << "node or export/player/node_modules/gltf-validator is missing (npm ci --prefix export/player)";
   }
   const Mesh sphere = TexturedSphere();
@@ -272,8 +272,7 @@ TEST(GltfWriter, KhronosValidatorReportsNoErrors) {
       options.jpeg_texture = decimate == 0;
       const std::string path = dir / "scene.glb";
       WriteGlb(path, sphere, frames, SphereTexture(0), options);
-      const std::string report = testing::CaptureOutput("node '" + testing::SourceRoot() + "/tests/export/gltf_validate.cjs' '" +
-                                                        modules + "' '" + path + "' 2>&1; echo exit=$?");
+      const std::string report = testing::ValidateGltf(path);
       EXPECT_NE(report.find("\"errors\": 0,"), std::string::npos) << report;
       EXPECT_NE(report.find("\"warnings\": 0,"), std::string::npos) << report;
       EXPECT_NE(report.find("exit=0"), std::string::npos) << report;

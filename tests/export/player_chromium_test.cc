@@ -18,10 +18,16 @@
 #include "export/player_writer.h"
 #include "render/renderer.h"
 #include "tests/export/gltf_test_scene.h"
+#include "tests/export/player_test_tools.h"
 #include "tests/support/test_support.h"
 
 namespace confluent {
 namespace {
+
+using testing::FindBrowser;
+using testing::Iou;
+using testing::RunNodeScript;
+using testing::Silhouette;
 
 std::string FileBytes(const std::string& path) {
   std::ifstream file(path, std::ios::binary);
@@ -69,54 +75,6 @@ TEST(PlayerWriter, WritesTheEmbeddedFilesByteForByte) {
   EXPECT_THROW(WritePlayer("/proc/confluent-no/player"), OutputError);
 }
 
-// Pixels brighter than the black background (the textures have no texel below 28).
-Image Silhouette(const Image& image) {
-  Image mask(image.width, image.height, 1);
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < image.width; ++x) {
-      int brightest = 0;
-      for (int c = 0; c < 3; ++c) brightest = std::max<int>(brightest, image.at<std::uint8_t>(x, y, c));
-      mask.at<std::uint8_t>(x, y) = brightest > 12 ? 255 : 0;
-    }
-  }
-  return mask;
-}
-
-double Iou(const Image& a, const Image& b, Image* intersection) {
-  *intersection = Image(a.width, a.height, 1);
-  long both = 0, either = 0;
-  for (std::size_t i = 0; i < a.data.size(); ++i) {
-    const bool in_a = a.data[i] != 0, in_b = b.data[i] != 0;
-    both += in_a && in_b;
-    either += in_a || in_b;
-    intersection->data[i] = in_a && in_b ? 255 : 0;
-  }
-  return either ? static_cast<double>(both) / either : 0.0;
-}
-
-// What the Chromium tests need: node, playwright-core from export/player's npm packages, Debian's
-// chromium ($CONFLUENT_CHROMIUM overrides) and ffmpeg; the reason when something is missing.
-struct Browser {
-  std::string chromium;
-  std::string modules;
-  std::string missing;
-};
-
-Browser FindBrowser() {
-  Browser browser;
-  const char* chromium_env = std::getenv("CONFLUENT_CHROMIUM");
-  browser.chromium = chromium_env ? chromium_env : "/usr/bin/chromium";
-  browser.modules = testing::PlayerNodeModules("playwright-core");
-  if (!testing::NodeAvailable() || browser.modules.empty() ||
-      std::system(("test -x '" + browser.chromium + "'").c_str()) != 0) {
-    browser.missing = "needs node, export/player/node_modules/playwright-core (npm ci --prefix export/player) and " +
-                      browser.chromium + " (Debian's chromium; $CONFLUENT_CHROMIUM overrides)";
-  } else if (!FfmpegAvailable()) {
-    browser.missing = "ffmpeg is missing (the atlas video)";
-  }
-  return browser;
-}
-
 // An export in `dir`: scene.glb of the moving sphere, atlas.mp4 (H.264, one atlas per frame)
 // and player/.
 struct SphereExport {
@@ -132,15 +90,8 @@ struct SphereExport {
   }
 };
 
-// Runs tests/export/<script> with node and returns its output (stdout and stderr).
-std::string RunNodeScript(const std::string& script, const std::vector<std::string>& args) {
-  std::string command = "node '" + testing::SourceRoot() + "/tests/export/" + script + "'";
-  for (const std::string& arg : args) command += " '" + arg + "'";
-  return testing::CaptureOutput(command + " 2>&1");
-}
-
 TEST(PlayerInChromium, FrameFromAFixedCameraMatchesConfluentsRender) {
-  const Browser found = FindBrowser();
+  const testing::Browser found = FindBrowser();
   if (!found.missing.empty()) GTEST_SKIP() << found.missing;
   std::unique_ptr<MeshRenderer> renderer;
   try {
@@ -205,7 +156,7 @@ TEST(PlayerInChromium, FrameFromAFixedCameraMatchesConfluentsRender) {
 // The interactive page: the mesh follows the playing video, stays on the video's frame when
 // paused, and the timeline moves both.
 TEST(PlayerInChromium, PlaysWithTheMeshFollowingTheVideo) {
-  const Browser found = FindBrowser();
+  const testing::Browser found = FindBrowser();
   if (!found.missing.empty()) GTEST_SKIP() << found.missing;
   const int frames = 12, seek = 7;
   testing::TempDir dir;
