@@ -1,4 +1,4 @@
-// confluent export [CAPTURE] --run RUN --out DIR: the arguments of a run's export
+// confluent export RUN --out DIR [--capture CAPTURE]: the arguments of a run's export
 // (pipeline/export_run.h) and its summary on the terminal.
 
 #include <algorithm>
@@ -23,7 +23,7 @@ void PrintStream(const char* label, const ExportedStream& stream) {
 }
 
 int RunExport(const ParsedArgs& args, const Context& context) {
-  const FinishedRun finished = OpenFinishedRun(args.get("run"), args.positionals().empty() ? "" : args.positionals()[0]);
+  const FinishedRun finished = OpenFinishedRun(args.positionals()[0], args.get("capture", ""));
   ExportOptions options;
   options.atlas.size_px = args.get_int("atlas-size", options.atlas.size_px);
   options.stream_triangles = args.get_int("decimate", 0);
@@ -70,7 +70,7 @@ CommandSpec MakeExportCommand() {
   CommandSpec spec;
   spec.name = "export";
   spec.summary = "export a run's 3D video: glTF (scene.glb), atlas video, web player, mesh sequences";
-  spec.usage = "[CAPTURE] --run RUN --out DIR [--frames A:B] [--decimate N] [--atlas-size PX] [--ply] [--obj] [--pc2]";
+  spec.usage = "RUN --out DIR [--capture CAPTURE] [--frames A:B] [--decimate N] [--atlas-size PX] [--ply] [--obj] [--pc2]";
   spec.description =
       "Gives the run's scan a UV atlas (charts along the body segments, flattened and packed once), bakes\n"
       "every frame's projective texture from the capture's cameras into it (as `render` blends them; the\n"
@@ -85,12 +85,13 @@ CommandSpec MakeExportCommand() {
       "                    smaller atlas (--stream-atlas-size, default 1024)\n"
       "  DIR/ply/, DIR/obj/, DIR/scan.pc2 + rest.ply   with --ply, --obj (atlas UVs, atlas.png), --pc2\n"
       "  DIR/export.json   sizes, bitrates and the atlas's figures\n"
-      "Every frame of the range needs its scan (RUN/scan/<frame>.ply). CAPTURE defaults to the one\n"
-      "RUN/run.json names; the cameras the run held out never texture unless --texture-from-held-out.";
-  spec.min_positionals = 0;
+      "Every frame of the range needs its scan (RUN/scan/<frame>.ply). The capture is the one\n"
+      "RUN/run.json names unless --capture; the cameras the run held out never texture unless\n"
+      "--texture-from-held-out.";
+  spec.min_positionals = 1;
   spec.max_positionals = 1;
   spec.options = {
-      {"run", "RUN", "the run folder (scan/, masks/)", false, true},
+      {"capture", "CAPTURE", "the capture the run was made from (default: the one RUN/run.json names)"},
       {"out", "DIR", "output folder", false, true},
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
       {"atlas-size", "PX", "atlas width and height (default 2048)"},

@@ -60,7 +60,7 @@ TEST(ExportCommand, WritesGlbAtlasVideoPlayerAndSequencesThatReproduceTheCameras
   ExportFixture f;
   const std::string out = f.dir / "export";
   const testing::CommandResult result =
-      testing::RunConfluent({"export", f.capture, "--run", f.run, "--out", out, "--frames", "0:2", "--atlas-size",
+      testing::RunConfluent({"export", f.run, "--capture", f.capture, "--out", out, "--frames", "0:2", "--atlas-size",
                              "512", "--decimate", "500", "--stream-atlas-size", "256", "--ply", "--obj", "--pc2"});
   ASSERT_EQ(result.exit_code, 0) << result.stderr_text;
   EXPECT_NE(result.stdout_text.find("exported frames 0:2"), std::string::npos) << result.stdout_text;
@@ -121,13 +121,13 @@ TEST(ExportCommand, ExportPassesTheValidatorAndPlaysInChromiumAsConfluentRenders
   ExportFixture f;
   const std::string out = f.dir / "export";
   const testing::CommandResult result = testing::RunConfluent(
-      {"export", f.capture, "--run", f.run, "--out", out, "--frames", "0:2", "--atlas-size", "512", "--obj"});
+      {"export", f.run, "--capture", f.capture, "--out", out, "--frames", "0:2", "--atlas-size", "512", "--obj"});
   ASSERT_EQ(result.exit_code, 0) << result.stderr_text;
   for (const bool meshopt : {true, false}) {
     std::string glb = out + "/scene.glb";
     if (!meshopt) {  // the file for Blender: its data is what the validator can decode
       const std::string plain = f.dir / "plain";
-      ASSERT_EQ(testing::RunConfluent({"export", f.capture, "--run", f.run, "--out", plain, "--frames", "0:2",
+      ASSERT_EQ(testing::RunConfluent({"export", f.run, "--capture", f.capture, "--out", plain, "--frames", "0:2",
                                        "--atlas-size", "512", "--no-meshopt", "--no-player"})
                     .exit_code,
                 0);
@@ -174,7 +174,7 @@ TEST(ExportCommand, ExportPassesTheValidatorAndPlaysInChromiumAsConfluentRenders
 TEST(ExportCommand, AFrameWithoutItsScanIsAnErrorNamingTheFile) {
   ExportFixture f;
   const testing::CommandResult result =
-      testing::RunConfluent({"export", f.capture, "--run", f.run, "--out", f.dir / "export", "--atlas-size", "256"});
+      testing::RunConfluent({"export", f.run, "--capture", f.capture, "--out", f.dir / "export", "--atlas-size", "256"});
   EXPECT_EQ(result.exit_code, 1);
   EXPECT_NE(result.stderr_text.find(f.run + "/scan/000002.ply"), std::string::npos) << result.stderr_text;
   EXPECT_NE(result.stderr_text.find("--frames"), std::string::npos) << result.stderr_text;
