@@ -8,6 +8,7 @@
 #include <map>
 #include <numeric>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/error.h"
@@ -79,10 +80,12 @@ struct Chart {
   bool turned = false;                 // packed turned by 90 degrees
 };
 
+void OrientChart(Chart* chart);
+
 class Flattener {
  public:
-  Flattener(const Mesh& mesh, const RowMatrixX3i& neighbours, const UvAtlasOptions& options, double texels_per_m)
-      : mesh_(mesh), neighbours_(neighbours), options_(options), texels_per_m_(texels_per_m),
+  Flattener(const Mesh& mesh, const RowMatrixX3i& neighbours, const UvAtlasOptions& options)
+      : mesh_(mesh), neighbours_(neighbours), options_(options),
         vertex_slot_(mesh.num_vertices(), -1), in_chart_(mesh.num_faces(), -2) {}
 
   // Flattens `faces` into charts (cutting as needed) appended to `out`.
@@ -153,6 +156,7 @@ class Flattener {
     }
     // Pins: two far-apart boundary vertices.
     std::vector<char> on_boundary(n, 0);
+    boundary_.clear();
     for (int i = 0; i < m; ++i) {
       const int f = chart->faces[i];
       for (int k = 0; k < 3; ++k) {
@@ -160,6 +164,7 @@ class Flattener {
         if (g < 0 || in_chart_[g] != 1) {
           on_boundary[chart->local[3 * i + (k + 1) % 3]] = 1;
           on_boundary[chart->local[3 * i + (k + 2) % 3]] = 1;
+          boundary_.emplace_back(chart->local[3 * i + (k + 1) % 3], chart->local[3 * i + (k + 2) % 3]);
         }
       }
     }
@@ -250,7 +255,16 @@ class Flattener {
       stretch_sum += a3 * SquaredStretch(*chart, i);
     }
     if (std::sqrt(stretch_sum / area_3d) > options_.max_chart_stretch) return false;
-    return !OverlapsItself(*chart);
+    if (m >= 256 && BoxFill(*chart, area_3d) < options_.min_chart_fill) return false;
+    return !OverlapsItself(*chart, on_boundary);
+  }
+
+  // The chart's UV area (`area`, equal to its surface area) over the area of its bounding box in
+  // its principal axes.
+  static double BoxFill(const Chart& chart, double area) {
+    Chart oriented = chart;
+    OrientChart(&oriented);
+    return area / std::max(oriented.width * oriented.height, 1e-30);
   }
 
   double FaceArea(int f) const {
@@ -278,23 +292,57 @@ class Flattener {
   }
 
  private:
-  // True when two triangles of the chart cover a common sample of a grid at about the atlas's
-  // texel density (at least 64 samples across the chart's larger side).
-  bool OverlapsItself(const Chart& chart) const {
+  // True when the flattened chart is not embedded. Its triangles are all counter-clockwise, so
+  // it is an immersion where every interior vertex's angles sum to 2 pi; an immersed disc whose
+  // boundary does not cross itself is embedded. Checked exactly: the angle sums, and every pair
+  // of boundary edges without a common vertex (bucketed on a grid) for an intersection.
+  bool OverlapsItself(const Chart& chart, const std::vector<char>& on_boundary) const {
+    const int n = static_cast<int>(chart.uv.size());
+    std::vector<double> angle(n, 0.0);
+    for (std::size_t i = 0; i < chart.faces.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector2d a = chart.uv[chart.local[3 * i + k]], b = chart.uv[chart.local[3 * i + (k + 1) % 3]],
+                              c = chart.uv[chart.local[3 * i + (k + 2) % 3]];
+        const Eigen::Vector2d u = b - a, v = c - a;
+        angle[chart.local[3 * i + k]] += std::atan2(u.x() * v.y() - u.y() * v.x(), u.dot(v));
+      }
+    for (int i = 0; i < n; ++i)
+      if (!on_boundary[i] && std::abs(angle[i] - 2.0 * M_PI) > 0.1) return true;
+    const std::size_t edges = boundary_.size();
     Eigen::Vector2d lo(1e30, 1e30), hi(-1e30, -1e30);
-    for (const Eigen::Vector2d& p : chart.uv) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-    const double extent = std::max(hi.x() - lo.x(), hi.y() - lo.y());
-    if (!(extent > 0)) return true;
-    const double step = std::min(1.0 / texels_per_m_, extent / 64.0);
-    const int w = static_cast<int>(std::ceil((hi.x() - lo.x()) / step)) + 1;
-    const int h = static_cast<int>(std::ceil((hi.y() - lo.y()) / step)) + 1;
-    if (static_cast<double>(w) * h > 6e7) return false;  // not checked (bigger than any atlas)
-    std::vector<std::uint8_t> hits(static_cast<std::size_t>(w) * h, 0);
-    for (std::size_t i = 0; i < chart.faces.size(); ++i) {
-      Eigen::Vector2d p[3];
-      for (int k = 0; k < 3; ++k) p[k] = (chart.uv[chart.local[3 * i + k]] - lo) / step;
-      if (RasteriseTriangle(p, w, h, [&](int x, int y) { return ++hits[static_cast<std::size_t>(y) * w + x] > 1; }))
-        return true;
+    double length = 0;
+    for (const auto& [a, b] : boundary_) {
+      lo = lo.cwiseMin(chart.uv[a]).cwiseMin(chart.uv[b]);
+      hi = hi.cwiseMax(chart.uv[a]).cwiseMax(chart.uv[b]);
+      length += (chart.uv[a] - chart.uv[b]).norm();
+    }
+    const double cell = std::max(length / std::max<std::size_t>(edges, 1), 1e-12);
+    const int w = std::min(4096, static_cast<int>((hi.x() - lo.x()) / cell) + 1);
+    const int h = std::min(4096, static_cast<int>((hi.y() - lo.y()) / cell) + 1);
+    const double sx = w / std::max(hi.x() - lo.x(), 1e-30), sy = h / std::max(hi.y() - lo.y(), 1e-30);
+    std::vector<std::vector<int>> grid(static_cast<std::size_t>(w) * h);
+    auto orient = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+      const double d = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+      return d > 0 ? 1 : d < 0 ? -1 : 0;
+    };
+    for (std::size_t e = 0; e < edges; ++e) {
+      const auto [a, b] = boundary_[e];
+      const Eigen::Vector2d p = chart.uv[a], q = chart.uv[b];
+      const int x0 = std::clamp(static_cast<int>((std::min(p.x(), q.x()) - lo.x()) * sx), 0, w - 1);
+      const int x1 = std::clamp(static_cast<int>((std::max(p.x(), q.x()) - lo.x()) * sx), 0, w - 1);
+      const int y0 = std::clamp(static_cast<int>((std::min(p.y(), q.y()) - lo.y()) * sy), 0, h - 1);
+      const int y1 = std::clamp(static_cast<int>((std::max(p.y(), q.y()) - lo.y()) * sy), 0, h - 1);
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          std::vector<int>& bucket = grid[static_cast<std::size_t>(y) * w + x];
+          for (int f : bucket) {
+            const auto [c, d] = boundary_[f];
+            if (c == a || c == b || d == a || d == b) continue;
+            const Eigen::Vector2d r = chart.uv[c], t = chart.uv[d];
+            if (orient(p, q, r) * orient(p, q, t) <= 0 && orient(r, t, p) * orient(r, t, q) <= 0) return true;
+          }
+          bucket.push_back(static_cast<int>(e));
+        }
     }
     return false;
   }
@@ -364,9 +412,9 @@ class Flattener {
   const Mesh& mesh_;
   const RowMatrixX3i& neighbours_;
   const UvAtlasOptions& options_;
-  double texels_per_m_;
   std::vector<int> vertex_slot_;
   std::vector<int> in_chart_;
+  std::vector<std::pair<int, int>> boundary_;  // the chart's boundary edges (chart vertices)
 };
 
 // Rotates a chart to its principal axes, long side along u, and records its bounding box.
@@ -447,6 +495,7 @@ void UvAtlasOptions::Check() const {
   RequireOption(padding_px >= 0 && padding_px <= 64, "UvAtlasOptions.padding_px", padding_px, "in [0, 64]");
   RequireOption(max_chart_stretch >= 1.0, "UvAtlasOptions.max_chart_stretch", max_chart_stretch, ">= 1");
   RequireOption(min_chart_faces >= 0, "UvAtlasOptions.min_chart_faces", min_chart_faces, ">= 0");
+  RequireOption(min_chart_fill >= 0.0 && min_chart_fill < 1.0, "UvAtlasOptions.min_chart_fill", min_chart_fill, "in [0, 1)");
   RequireOption(smoothing_passes >= 0 && smoothing_passes <= 100, "UvAtlasOptions.smoothing_passes",
                 smoothing_passes, "in [0, 100]");
 }
@@ -530,9 +579,8 @@ UvAtlas BuildUvAtlas(const Mesh& mesh, const UvAtlasOptions& options) {
     }
   }
 
-  // Flatten (cutting as needed), at about the density the atlas will have (70% of it used).
-  const double density_guess = std::sqrt(0.7 * options.size_px * static_cast<double>(options.size_px) / total_area);
-  Flattener flattener(mesh, neighbours, options, density_guess);
+  // Flatten, cutting as needed.
+  Flattener flattener(mesh, neighbours, options);
   std::vector<Chart> charts;
   for (std::vector<int>& group : groups)
     if (!group.empty()) flattener.Flatten(std::move(group), &charts);

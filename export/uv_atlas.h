@@ -9,7 +9,8 @@
 // are not ragged), then split into edge-connected components; components smaller than
 // min_chart_faces join the neighbour they share most edges with. A chart that is not a disc
 // (Euler characteristic != 1: closed, with holes or handles), whose flattening flips or overlaps
-// a triangle, or whose stretch exceeds max_chart_stretch is cut in two across its longest
+// a triangle, whose stretch exceeds max_chart_stretch, or that fills less than min_chart_fill of
+// its bounding box is cut in two across its longest
 // principal axis (at the area median) and each part is tried again, down to single triangles.
 //
 // Packing. Each chart is rotated to its principal axes (long side horizontal) and scaled so that
@@ -30,6 +31,9 @@ struct UvAtlasOptions {
   int padding_px = 4;    // gutter around each chart, texels (0..64)
   // Largest area-weighted L2 stretch (Sander et al. 2001) a chart may have before it is cut, >= 1.
   double max_chart_stretch = 1.25;
+  // A chart of 256 faces or more whose area fills less of its bounding box (in its principal axes)
+  // is cut: ragged charts waste atlas texels (0 = never).
+  double min_chart_fill = 0.3;
   // Connected pieces with fewer faces join a neighbouring chart (0 = keep every piece).
   int min_chart_faces = 24;
   // Passes of the majority filter that smooths the normal-direction grouping (0 = none).
