@@ -70,7 +70,16 @@ for node in null zero full random urandom tty; do  # mmdebstrap makes these; che
   [ -e "$root/dev/$node" ] || { echo "fresh-root: $root/dev/$node missing" >&2; exit 1; }
 done
 cp /etc/resolv.conf "$root/etc/resolv.conf"
+# The host's own certificate authorities (a TLS-inspecting proxy's, for example) belong to the
+# machine, not to the project: without them npm (export/player's three.js) cannot reach the
+# registry from the root. Debian's ca-certificates adds them to the root's store when
+# .ci/install-deps.sh installs it, and NODE_EXTRA_CA_CERTS points node at that store.
+if compgen -G "/usr/local/share/ca-certificates/*.crt" >/dev/null; then
+  mkdir -p "$root/usr/local/share/ca-certificates"
+  cp /usr/local/share/ca-certificates/*.crt "$root/usr/local/share/ca-certificates/"
+fi
 
 chroot "$root" /usr/bin/env -i HOME=/root LANG=C.UTF-8 TERM=dumb CI="${CI:-}" \
+  NODE_EXTRA_CA_CERTS=/etc/ssl/certs/ca-certificates.crt \
   PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
   /bin/bash -c 'cd /work/main && exec "$@"' fresh-root "$@"
