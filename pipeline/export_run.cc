@@ -24,12 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
 Image ResizedTo(const Image& image, int size_px) {
   cv::Mat resized;
   cv::resize(AsCvMat(image), resized, cv::Size(size_px, size_px), 0, 0, cv::INTER_AREA);
@@ -210,7 +204,7 @@ ExportSummary ExportRun(const FinishedRun& finished, const Capture& capture, con
                    static_cast<std::size_t>(range.size()), "frame " + std::to_string(frame));
   }
   if (cache) cache->Finish();
-  summary.median_bake_ms = Median(bake_ms);
+  summary.median_bake_ms = MedianTiming(bake_ms);
 
   ReportProgress(progress, "export: glTF", 0, stream ? 2 : 1);
   const double seconds = range.size() / summary.fps;

@@ -49,12 +49,6 @@ Camera Resized(const Camera& camera, int width, int height) {
   return ResizedCamera(camera, width, height);
 }
 
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
 }  // namespace
 
 void NovelViewOptions::Check() const {
@@ -248,8 +242,8 @@ NovelViewSummary RenderNovelViews(const FinishedRun& finished, const Capture& ca
   summary.width = first.width;
   summary.height = first.height;
   summary.texturing_cameras = static_cast<int>(used.size());
-  summary.median_setup_ms = Median(set_ms);
-  summary.median_render_ms = Median(render_ms);
+  summary.median_setup_ms = MedianTiming(set_ms);
+  summary.median_render_ms = MedianTiming(render_ms);
   if (video) {
     summary.video_path = video->path();
     summary.video_frames = video->frames_written();

@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
@@ -91,6 +92,12 @@ double TimingLog::StageSeconds(const std::string& stage) const {
   for (const Row& row : rows_)
     if (row.stage == stage) sum += row.seconds;
   return sum;
+}
+
+double MedianTiming(std::vector<double> timings) {
+  if (timings.empty()) return 0.0;
+  std::nth_element(timings.begin(), timings.begin() + timings.size() / 2, timings.end());
+  return timings[timings.size() / 2];
 }
 
 double NowSeconds() {
