@@ -1,5 +1,6 @@
 #include "pipeline/scan_correspondence.h"
 
+#include <cstdio>
 #include <filesystem>
 
 #include "core/error.h"
@@ -9,26 +10,68 @@ namespace confluent {
 
 namespace {
 
-// The registration from the tracked shape and pose failed with `failure`. A scan in the
-// performer's first pose is started from the first tracked frame's pose; failing that (the
-// tracked shape or pose can be poor: a coarse capture, an unusual first frame), the template is
-// registered as `confluent correspond` does, from the scan alone with the shape fitted. The
-// caller's reference keeps the tracked shape, which the tracked template meshes have.
-ScanRegistration RegisterAfterSeededFailure(const BodyTemplate& body, const Mesh& scan, const std::string& scan_path,
-                                            const ScanRegistrationOptions& seeded,
-                                            const ScanCorrespondenceOptions& options, const std::string& failure) {
-  if (options.first_tracked_pose) {
-    ScanRegistrationOptions from_first_frame = seeded;
-    from_first_frame.initial_pose = options.first_tracked_pose;
+// The first tracked frame's template is kept as the scan's reference pose when its residual is
+// within this factor of the registration fitted from it.
+constexpr double kAsTrackedTolerance = 1.25;
+
+std::string Centimetres(double metres) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f cm", 100.0 * metres);
+  return text;
+}
+
+// The registration seeded by the tracked shape (and pose, when given). When the first tracked
+// frame's pose is known, the registration is also started from it and the one that fits the scan
+// better is kept: a scan taken in the performer's first pose (crouched, arms against the body) is
+// reached from there, not from a standing body, and registered so, its frame 0 is the scan itself.
+// When neither start gives a human-like fit (the tracked shape or pose can be poor: a coarse
+// capture, an unusual first frame), the template is registered as `confluent correspond` does,
+// from the scan alone with the shape fitted; the caller's reference keeps the tracked shape.
+ScanRegistration RegisterSeeded(const BodyTemplate& body, const Mesh& scan, const std::string& scan_path,
+                                const ScanRegistrationOptions& seeded, const ScanCorrespondenceOptions& options) {
+  std::optional<ScanRegistration> from_seed, from_first_frame;
+  std::string failure;
+  try {
+    from_seed = RegisterTemplateToScan(body, scan, seeded, scan_path);
+  } catch (const InputError& e) {
+    if (!options.known_shape && !options.initial_pose) throw;
+    failure = e.what();
+  }
+  std::optional<ScanRegistration> as_tracked;
+  if (options.first_tracked_pose && !options.initial_pose) {
+    ScanRegistrationOptions first = seeded;
+    first.initial_pose = options.first_tracked_pose;
     try {
-      ScanRegistration registration = RegisterTemplateToScan(body, scan, from_first_frame, scan_path);
-      registration.warnings.push_back("the registration from the tracked shape failed (" + failure +
-                                      "); it was started from the first tracked frame's pose instead");
-      return registration;
+      from_first_frame = RegisterTemplateToScan(body, scan, first, scan_path);
+      first.rounds = 0;  // the first tracked frame's template as it is
+      as_tracked = RegisterTemplateToScan(body, scan, first, scan_path);
     } catch (const InputError&) {
-      // On to the scan alone.
+      // The scan is not in the first frame's pose (or not in the capture's frame).
     }
   }
+  const bool first_fits_better =
+      from_first_frame && (!from_seed || from_first_frame->rms_residual_m < from_seed->rms_residual_m);
+  // The scan stands in the first frame's pose, and the tracked template fits it about as well as
+  // a fit to the scan does: frame 0's template itself is the reference, so that frame 0 of the
+  // animated scan is the scan and later frames move by what the tracker saw move.
+  const double fitted_rms = first_fits_better ? from_first_frame->rms_residual_m
+                                              : from_seed ? from_seed->rms_residual_m : 0.0;
+  if (as_tracked && as_tracked->rms_residual_m <= kAsTrackedTolerance * fitted_rms) {
+    as_tracked->warnings.push_back("the scan stands in the first tracked frame's pose: that frame's template is the "
+                                   "reference (rms " + Centimetres(as_tracked->rms_residual_m) + ", fitted " +
+                                   Centimetres(fitted_rms) + ")");
+    return *as_tracked;
+  }
+  if (first_fits_better) {
+    from_first_frame->warnings.push_back(
+        from_seed ? "the template was registered from the first tracked frame's pose: it fits the scan better "
+                    "(rms " + Centimetres(fitted_rms) + ", against " + Centimetres(from_seed->rms_residual_m) +
+                        " from a standing body)"
+                  : "the registration from the tracked shape failed (" + failure +
+                        "); it was started from the first tracked frame's pose instead");
+    return *from_first_frame;
+  }
+  if (from_seed) return *from_seed;
   ScanRegistration registration = RegisterTemplateToScan(body, scan, ScanRegistrationOptions(), scan_path);
   registration.warnings.push_back("the registration from the tracked shape and pose failed (" + failure +
                                   "); the template was registered from the scan alone, its shape fitted");
@@ -48,13 +91,7 @@ ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh
     registration_options.initial_shape = *options.known_shape;
   }
   registration_options.initial_pose = options.initial_pose;
-  try {
-    result.registration = RegisterTemplateToScan(body, scan, registration_options, scan_path);
-  } catch (const InputError& seeded_failure) {
-    if (!options.known_shape && !options.initial_pose) throw;
-    result.registration = RegisterAfterSeededFailure(body, scan, scan_path, registration_options, options,
-                                                     seeded_failure.what());
-  }
+  result.registration = RegisterSeeded(body, scan, scan_path, registration_options, options);
   const BodyShape& shape = options.known_shape ? *options.known_shape : result.registration.shape;
   result.reference = body.PosedMesh(shape, result.registration.pose);
   const int template_faces = result.reference.num_faces(), scan_faces = scan.num_faces();

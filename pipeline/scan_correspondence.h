@@ -19,9 +19,9 @@ struct ScanCorrespondenceOptions {
   // reference template keeps exactly this shape. Absent: the shape is fitted to the scan.
   std::optional<BodyShape> known_shape;
   std::optional<TemplatePose> initial_pose;  // where the registration starts (a tracked pose)
-  // Tried when the registration from known_shape / initial_pose fails, before the scan alone:
-  // the first tracked frame's pose, for a scan taken in the performer's first pose (crouched,
-  // arms against the body) that a start from a standing body does not reach.
+  // Without initial_pose, a second start beside the one from a standing body (the better fit is
+  // kept): the first tracked frame's pose, for a scan taken in the performer's first pose
+  // (crouched, arms against the body) that a start from a standing body does not reach.
   std::optional<TemplatePose> first_tracked_pose;
   std::string given_path;   // correspondences to read and validate instead of placing; "": place
   std::string manual_path;  // with placement: pairs kept first, the automatic ones complete them
@@ -36,10 +36,12 @@ struct ScanCorrespondence {
   int num_manual = 0;               // manual pairs among them
 };
 
-// Registers `body` to `scan` (read from `scan_path`) and places or reads the pairs. When the
-// registration seeded by a known shape or pose fails, it is done again from the first tracked
-// pose (when given), else from the scan alone (with a warning in registration.warnings). Throws InputError naming the scan or a
-// correspondences file, UsageError for a bad option.
+// Registers `body` to `scan` (read from `scan_path`) and places or reads the pairs. With the
+// first tracked pose, the registration is also started from it and the better fit kept; when
+// that frame's template, unfitted, fits the scan about as well, it is the reference itself (the
+// scan stands in the first frame's pose). When the seeded registrations fail, it is done from
+// the scan alone (with a warning in registration.warnings). Throws InputError naming the scan or
+// a correspondences file, UsageError for a bad option.
 ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh& scan, const std::string& scan_path,
                                             const ScanCorrespondenceOptions& options);
 

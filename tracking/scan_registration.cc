@@ -20,6 +20,7 @@
 #include "tracking/body_model_impl.h"
 #include "tracking/fit_params.h"
 #include "tracking/pose_from_joints.h"
+#include "tracking/scan_samples.h"
 
 namespace confluent {
 
@@ -31,7 +32,7 @@ void ScanRegistrationOptions::Check() const {
   const std::string owner = "ScanRegistrationOptions.";
   RequireOption(num_scan_samples >= 100, owner + "num_scan_samples", num_scan_samples, ">= 100");
   RequireOption(num_scan_residuals >= 50, owner + "num_scan_residuals", num_scan_residuals, ">= 50");
-  RequireOption(rounds >= 1, owner + "rounds", rounds, ">= 1");
+  RequireOption(rounds >= 0, owner + "rounds", rounds, ">= 0");
   RequireOption(max_iterations >= 1, owner + "max_iterations", max_iterations, ">= 1");
   RequireOption(min_pair_distance_m > 0, owner + "min_pair_distance_m", min_pair_distance_m, "> 0");
   RequireOptions(max_pair_distance_m >= min_pair_distance_m, owner + "min_pair_distance_m", min_pair_distance_m,
@@ -60,116 +61,9 @@ using ti::TemplateFitSolverOptions;
 using ti::SegmentWorld;
 using ti::ShapeArrays;
 using ti::ShapeToParams;
-
-// ---------------------------------------------------------------------------------------------
-// Nearest-neighbour queries on scan samples: a static k-d tree.
-class KdTree {
- public:
-  explicit KdTree(const std::vector<Vector3d>* points) : points_(points) {
-    index_.resize(points->size());
-    std::iota(index_.begin(), index_.end(), 0);
-    if (!index_.empty()) root_ = Build(0, static_cast<int>(index_.size()));
-  }
-
-  // Index of the nearest point, or -1 when empty; `distance2` its squared distance.
-  int Nearest(const Vector3d& q, double* distance2) const {
-    int best = -1;
-    double best_d2 = std::numeric_limits<double>::infinity();
-    if (root_ >= 0) Search(root_, q, &best, &best_d2);
-    *distance2 = best_d2;
-    return best;
-  }
-
- private:
-  struct Node {
-    int begin, end, axis = -1, left = -1, right = -1;
-    double split = 0;
-  };
-
-  int Build(int begin, int end) {
-    Node node{begin, end};
-    const int id = static_cast<int>(nodes_.size());
-    nodes_.push_back(node);
-    if (end - begin <= 8) return id;
-    Eigen::AlignedBox3d box;
-    for (int i = begin; i < end; ++i) box.extend((*points_)[index_[i]]);
-    int axis;
-    box.sizes().maxCoeff(&axis);
-    const int mid = (begin + end) / 2;
-    std::nth_element(index_.begin() + begin, index_.begin() + mid, index_.begin() + end,
-                     [&](int a, int b) { return (*points_)[a][axis] < (*points_)[b][axis]; });
-    nodes_[id].axis = axis;
-    nodes_[id].split = (*points_)[index_[mid]][axis];
-    const int left = Build(begin, mid);
-    const int right = Build(mid, end);
-    nodes_[id].left = left;
-    nodes_[id].right = right;
-    return id;
-  }
-
-  void Search(int id, const Vector3d& q, int* best, double* best_d2) const {
-    const Node& node = nodes_[id];
-    if (node.axis < 0) {
-      for (int i = node.begin; i < node.end; ++i) {
-        const double d2 = ((*points_)[index_[i]] - q).squaredNorm();
-        if (d2 < *best_d2) {
-          *best_d2 = d2;
-          *best = index_[i];
-        }
-      }
-      return;
-    }
-    const double delta = q[node.axis] - node.split;
-    const int first = delta < 0 ? node.left : node.right, second = delta < 0 ? node.right : node.left;
-    Search(first, q, best, best_d2);
-    if (delta * delta < *best_d2) Search(second, q, best, best_d2);
-  }
-
-  const std::vector<Vector3d>* points_;
-  std::vector<int> index_;
-  std::vector<Node> nodes_;
-  int root_ = -1;
-};
-
-// Area-uniform samples of the scan surface with their face normals.
-struct ScanSamples {
-  std::vector<Vector3d> points, normals;
-  double spacing = 0.0;  // typical distance between neighbouring samples
-};
-
-ScanSamples SampleScan(const Mesh& scan, int count, bool flip_normals) {
-  const RowMatrixX3d cross = FaceCrossProducts(scan);
-  std::vector<double> cumulative;
-  cumulative.reserve(scan.num_faces());
-  double total = 0.0;
-  for (int f = 0; f < scan.num_faces(); ++f) {
-    const double a = cross.row(f).norm();
-    total += std::isfinite(a) ? a : 0.0;
-    cumulative.push_back(total);
-  }
-  ScanSamples samples;
-  if (!(total > 0)) return samples;
-  std::mt19937 rng(12345);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  for (int i = 0; i < count; ++i) {
-    const double r = (i + uniform(rng)) / count * total;  // stratified over the area
-    int f = static_cast<int>(std::lower_bound(cumulative.begin(), cumulative.end(), r) - cumulative.begin());
-    f = std::min(f, scan.num_faces() - 1);
-    double u = uniform(rng), v = uniform(rng);
-    if (u + v > 1) {
-      u = 1 - u;
-      v = 1 - v;
-    }
-    const Vector3d a = scan.vertices.row(scan.faces(f, 0)), b = scan.vertices.row(scan.faces(f, 1)),
-                   c = scan.vertices.row(scan.faces(f, 2));
-    const double norm = cross.row(f).norm();
-    if (!(norm > 0)) continue;
-    samples.points.push_back(a + u * (b - a) + v * (c - a));
-    samples.normals.push_back(cross.row(f).transpose() / norm * (flip_normals ? -1.0 : 1.0));
-  }
-  samples.spacing = std::sqrt(0.5 * total / std::max<std::size_t>(1, samples.points.size()));
-  return samples;
-}
+using ti::KdTree;
+using ti::ScanSamples;
+using ti::SampleScan;
 
 // ---------------------------------------------------------------------------------------------
 // Parameters and the template's segments in the world.
@@ -509,19 +403,61 @@ ScanRegistration RegisterTemplateToScan(const BodyTemplate& body, const Mesh& sc
   const double min_cos = std::cos(options.max_normal_angle_deg * M_PI / 180.0);
   const double loss = options.loss_scale_m * scale;
 
-  FitParams prior;
+  const int candidates = static_cast<int>(residual_samples.size() + kNumBodySegments * body.mesh_coords().size());
+  // Arm hypotheses from a placed body: A-pose (the template's rest), T-pose, arms down.
+  auto best_arms = [&](const FitParams& base) {
+    double best_score = std::numeric_limits<double>::infinity();
+    FitParams best = base;
+    for (double arm_deg : {40.0, 90.0, 12.0}) {
+      FitParams h = base;
+      h.dofs[kJointLeftShoulder] = ArmAngle(body, kJointLeftShoulder, arm_deg);
+      h.dofs[kJointRightShoulder] = ArmAngle(body, kJointRightShoulder, arm_deg);
+      const double max_d = options.max_pair_distance_m * scale;
+      for (int round = 0; round < 2; ++round) {
+        Pairing pairing = MakePairs(body, h, samples, tree, residual_samples, max_d, min_cos, loss);
+        Solve(body, &pairing, options, false, false, scale, h, &h);
+      }
+      const Pairing check = MakePairs(body, h, samples, tree, residual_samples, max_d, min_cos, loss);
+      const double score = HypothesisScore(check, candidates, max_d);
+      if (score < best_score) {
+        best_score = score;
+        best = h;
+      }
+    }
+    return best;
+  };
+  // The full fit: every joint (and the shape), shrinking pairing distance. The joint prior pulls
+  // towards the initial pose when one is given, else towards the template's rest pose.
+  auto full_fit = [&](FitParams fit) {
+    FitParams prior = fit;
+    prior.dofs = options.initial_pose ? options.initial_pose->dofs : TemplatePose().dofs;
+    ShapeToParams(shape, prior.shape);
+    for (int round = 0; round < options.rounds; ++round) {
+      const double max_d = std::max(options.min_pair_distance_m, options.max_pair_distance_m * std::pow(0.6, round)) * scale;
+      Pairing pairing = MakePairs(body, fit, samples, tree, residual_samples, max_d, min_cos, loss);
+      Solve(body, &pairing, options, false, options.fit_shape, scale, prior, &fit);
+    }
+    return fit;
+  };
+  auto final_rms = [&](const FitParams& fit) {
+    return MakePairs(body, fit, samples, tree, residual_samples, std::numeric_limits<double>::infinity(), min_cos, loss).rms;
+  };
+
   if (options.initial_pose) {
     PoseToParams(*options.initial_pose, &fp);
+    fp = full_fit(fp);
   } else {
     // Orientation hypotheses: up = +-major axis, lateral = +-second axis; a short rigid fit each.
     const auto rest = body.RestPositions(shape);
     const Vector3d template_centroid = AreaCentroid(body.PosedMesh(shape, rest_pose));
     double best_score = std::numeric_limits<double>::infinity();
-    FitParams best = fp;
-    for (int up_sign : {1, -1})
-      for (int lateral_sign : {1, -1}) {
-        const Vector3d up = up_sign * major;
-        const Vector3d lateral = (lateral_sign * second - up * up.dot(lateral_sign * second)).normalized();
+    FitParams facing[2][2];  // [up sign][lateral sign]
+    int best_up = 0, best_lateral = 0;
+    for (int u = 0; u < 2; ++u)
+      for (int l = 0; l < 2; ++l) {
+        const Vector3d up = (u == 0 ? 1 : -1) * major;
+        const Vector3d side = (l == 0 ? 1 : -1) * second;
+        const Vector3d lateral = (side - up * up.dot(side)).normalized();
         Matrix3d R;
         R.col(0) = lateral;
         R.col(1) = up.cross(lateral);
@@ -536,45 +472,22 @@ ScanRegistration RegisterTemplateToScan(const BodyTemplate& body, const Mesh& sc
           Solve(body, &pairing, options, /*rigid=*/true, false, scale, h, &h);
         }
         const Pairing check = MakePairs(body, h, samples, tree, residual_samples, max_d, min_cos, loss);
-        const int candidates = static_cast<int>(residual_samples.size() + kNumBodySegments * body.mesh_coords().size());
         const double score = HypothesisScore(check, candidates, max_d);
+        facing[u][l] = h;
         if (score < best_score) {
           best_score = score;
-          best = h;
+          best_up = u;
+          best_lateral = l;
         }
       }
-    fp = best;
-    // Arm hypotheses: A-pose (the template's rest), T-pose, arms down.
-    best_score = std::numeric_limits<double>::infinity();
-    const FitParams base = fp;
-    for (double arm_deg : {40.0, 90.0, 12.0}) {
-      FitParams h = base;
-      h.dofs[kJointLeftShoulder] = ArmAngle(body, kJointLeftShoulder, arm_deg);
-      h.dofs[kJointRightShoulder] = ArmAngle(body, kJointRightShoulder, arm_deg);
-      const double max_d = options.max_pair_distance_m * scale;
-      for (int round = 0; round < 2; ++round) {
-        Pairing pairing = MakePairs(body, h, samples, tree, residual_samples, max_d, min_cos, loss);
-        Solve(body, &pairing, options, false, false, scale, h, &h);
-      }
-      const Pairing check = MakePairs(body, h, samples, tree, residual_samples, max_d, min_cos, loss);
-      const int candidates = static_cast<int>(residual_samples.size() + kNumBodySegments * body.mesh_coords().size());
-      const double score = HypothesisScore(check, candidates, max_d);
-      if (score < best_score) {
-        best_score = score;
-        fp = h;
-      }
-    }
-  }
-  prior = fp;
-  prior.dofs = TemplatePose().dofs;  // the joint prior pulls towards the template's rest pose
-  if (options.initial_pose) prior.dofs = options.initial_pose->dofs;
-  ShapeToParams(shape, prior.shape);
-
-  // The full fit: every joint (and the shape), shrinking pairing distance.
-  for (int round = 0; round < options.rounds; ++round) {
-    const double max_d = std::max(options.min_pair_distance_m, options.max_pair_distance_m * std::pow(0.6, round)) * scale;
-    Pairing pairing = MakePairs(body, fp, samples, tree, residual_samples, max_d, min_cos, loss);
-    Solve(body, &pairing, options, false, options.fit_shape, scale, prior, &fp);
+    // Front and back of a body are alike to a rigid fit of the whole (both sides of the torso are
+    // convex); the feet, the face and the bent joints tell them apart once every joint is free.
+    // So the best placement and the one facing the other way are both fitted in full, and the
+    // smaller final residual decides: the whole rms, since the parts that tell them apart are a
+    // small share of the surface, the share a trimmed rms leaves out.
+    fp = full_fit(best_arms(facing[best_up][best_lateral]));
+    const FitParams turned = full_fit(best_arms(facing[best_up][1 - best_lateral]));
+    if (final_rms(turned) < final_rms(fp)) fp = turned;
   }
 
   result.shape = ParamsToShape(fp.shape);

@@ -33,7 +33,7 @@ struct ScanRegistrationOptions {
   std::optional<TemplatePose> initial_pose;
   int num_scan_samples = 20000;   // area-uniform samples of the scan surface (nearest-point queries)
   int num_scan_residuals = 2500;  // of those, samples that get a scan -> template residual
-  int rounds = 8;                 // pairing rounds of the full fit
+  int rounds = 8;                 // pairing rounds of the full fit (0: initial_pose as it is, measured)
   int max_iterations = 12;        // Levenberg-Marquardt iterations per round
   double max_pair_distance_m = 0.12;    // first-round pairing distance (halves down to min_pair_distance_m)
   double min_pair_distance_m = 0.03;    // last-round pairing distance

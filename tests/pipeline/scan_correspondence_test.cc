@@ -1,5 +1,6 @@
 // One register -> place path for run, correspond and animate: a registration seeded by a poor
-// tracked shape falls back to the first tracked pose, then to registering from the scan alone.
+// tracked shape falls back to the first tracked pose, then to registering from the scan alone;
+// a scan in the first tracked frame's pose takes that frame's template as its reference.
 
 #include "pipeline/scan_correspondence.h"
 
@@ -7,6 +8,7 @@
 
 #include "core/error.h"
 #include "core/skinning.h"
+#include "deform/confluent_motion.h"
 #include "studio/actor.h"
 
 namespace confluent {
@@ -86,6 +88,54 @@ TEST(ScanCorrespondence, CrouchedScanIsRegisteredFromTheFirstTrackedPose) {
   EXPECT_TRUE(warned);
   EXPECT_LT(result.registration.trimmed_rms_residual_m, 0.03);
   EXPECT_GT(result.correspondences.pairs.size(), 50u);
+}
+
+// The actor scanned with the arms turned from the A-pose and a knee bent, the tracker's first frame in
+// the same pose (found by registering to the scan, as a tracker that did well would): that
+// frame's template is the reference, so Confluent Motion gives back the scan at frame 0. A
+// first frame in another pose (arms raised) is a pose to register from, not the reference.
+TEST(ScanCorrespondence, ScanInTheFirstTrackedPoseIsReproducedAtFrameZero) {
+  StudioActorOptions actor_options;
+  actor_options.target_triangles = 12000;
+  const StudioActor actor = BuildStudioActor(actor_options);
+  const BodyTemplate body;
+  auto about = [](double angle, const Eigen::Vector3d& axis) { return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis)); };
+  Pose held = Pose::Rest(actor.skeleton.size());
+  held.local_rotations[kJointLeftShoulder] = about(0.45, Eigen::Vector3d::UnitY());
+  held.local_rotations[kJointRightShoulder] = about(-0.45, Eigen::Vector3d::UnitY());
+  held.local_rotations[kJointLeftHip] = about(0.5, Eigen::Vector3d::UnitX());
+  held.local_rotations[kJointLeftKnee] = about(-0.8, Eigen::Vector3d::UnitX());
+  Mesh scan = actor.mesh;
+  scan.vertices = SkinVertices(actor.mesh.vertices, actor.weights, actor.skeleton, held, SkinningMethod::kDualQuaternion);
+  const BodyShape shape = BodyShape::Uniform(1.75);
+  ScanRegistrationOptions fit;
+  fit.fit_shape = false;
+  fit.initial_shape = shape;
+  const TemplatePose tracked = RegisterTemplateToScan(body, scan, fit, "held.ply").pose;
+
+  ScanCorrespondenceOptions options;
+  options.known_shape = shape;
+  options.first_tracked_pose = tracked;
+  const ScanCorrespondence result = CorrespondTemplateToScan(body, scan, "held.ply", options);
+  bool said = false;
+  for (const std::string& warning : result.registration.warnings)
+    said = said || warning.find("first tracked frame's pose: that frame's template is the reference") != std::string::npos;
+  EXPECT_TRUE(said);
+  const Mesh frame0 = body.PosedMesh(shape, tracked);
+  EXPECT_LT((result.reference.vertices - frame0.vertices).cwiseAbs().maxCoeff(), 1e-9);
+  ConfluentMotion motion(scan, result.reference, result.correspondences);
+  const RowMatrixX3d animated = motion.Deform(frame0.vertices);
+  EXPECT_LT((animated - scan.vertices).rowwise().norm().maxCoeff(), 1e-4);  // frame 0 is the scan
+
+  // The tracker's first frame with the arms raised: the scan is not in it; registered instead.
+  TemplatePose raised = tracked;
+  raised.dofs[kJointLeftShoulder][1] += 1.0;
+  raised.dofs[kJointRightShoulder][1] -= 1.0;
+  options.first_tracked_pose = raised;
+  const ScanCorrespondence other = CorrespondTemplateToScan(body, scan, "held.ply", options);
+  for (const std::string& warning : other.registration.warnings)
+    EXPECT_EQ(warning.find("that frame's template is the reference"), std::string::npos) << warning;
+  EXPECT_LT(other.registration.rms_residual_m, 0.015);
 }
 
 TEST(ScanCorrespondence, WhatIsNoBodyIsStillRefused) {

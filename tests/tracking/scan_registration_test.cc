@@ -13,8 +13,10 @@
 #include "core/body_segments.h"
 #include "core/error.h"
 #include "core/mesh_ops.h"
+#include "core/skinning.h"
 #include "deform/correspondence_placement.h"
 #include "studio/actor.h"
+#include "studio/motion.h"
 #include "tests/support/test_support.h"
 #include "tracking/pose_from_joints.h"
 
@@ -144,6 +146,32 @@ TEST(ScanRegistration, TPoseScanWithHolesAndASeparateHairPiece) {
   const auto fitted = body.JointPositions(registration.shape, registration.pose);
   for (int j : {int(kJointLeftElbow), int(kJointRightElbow), int(kJointLeftWrist), int(kJointRightWrist), int(kJointLeftKnee), int(kJointHead)})
     EXPECT_LT((fitted[j] - truth[j]).norm(), 0.04) << body.joint_names()[j];
+}
+
+// The studio actor as posed at the built-in performance's first frame (arms a little forward,
+// weight on one leg), turned to face four ways: front and back look alike to a rigid fit of the
+// whole body, and the registration must still face the way the actor faces, left on left.
+TEST(ScanRegistration, FacesTheWayTheActorFacesNotTheOtherWay) {
+  StudioActorOptions actor_options;
+  actor_options.target_triangles = 12000;
+  const StudioActor actor = BuildStudioActor(actor_options);
+  StudioMotionOptions motion;
+  motion.num_frames = 1;
+  const Pose first = DefaultPerformance(actor.skeleton, motion).front();
+  const auto joints = WorldFromJoint(actor.skeleton, first);
+  const BodyTemplate body;
+  for (int quarter = 0; quarter < 4; ++quarter) {
+    const Eigen::Matrix3d turn = Eigen::AngleAxisd(quarter * M_PI / 2, Vector3d::UnitZ()).toRotationMatrix();
+    Mesh scan = actor.mesh;
+    scan.vertices = SkinVertices(actor.mesh.vertices, actor.weights, actor.skeleton, first, SkinningMethod::kDualQuaternion) *
+                    turn.transpose();
+    const ScanRegistration registration = RegisterTemplateToScan(body, scan);
+    const auto fitted = body.JointPositions(registration.shape, registration.pose);
+    for (int j : {int(kJointLeftHip), int(kJointRightHip), int(kJointLeftShoulder), int(kJointRightShoulder),
+                  int(kJointLeftAnkle), int(kJointRightAnkle), int(kJointHead)})
+      EXPECT_LT((fitted[j] - turn * joints[j].translation()).norm(), 0.05)
+          << body.joint_names()[j] << ", actor turned " << 90 * quarter << " degrees";
+  }
 }
 
 TEST(ScanRegistration, SphereIsRefusedWithTheResidual) {
