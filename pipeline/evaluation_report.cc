@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "pipeline/mask_confidence.h"
 
 namespace confluent {
 namespace fs = std::filesystem;
@@ -119,6 +120,31 @@ std::string SummaryTable(const EvaluationSummary& summary) {
   return out.str();
 }
 
+// The run's silhouette confidence (RUN/mask_confidence.json, when the run wrote one): the mean per
+// camera and the camera-frames below the threshold, which tracking followed regardless.
+std::string SilhouetteConfidenceHtml(const RunFolder& run) {
+  const std::string path = run.Path("mask_confidence.json");
+  if (!fs::exists(path)) return "";
+  const MaskConfidenceRecord record = ReadMaskConfidence(path);
+  std::ostringstream html;
+  html << "<h2>Silhouette confidence</h2>\n<p>Each camera's mask against the visual hull of the other cameras (on a "
+       << record.source << " of the run's frames, " << record.camera_frames << " camera-frames checked; mean " << Fixed(record.mean_confidence, 3)
+       << "). A camera-frame below " << Fixed(record.min_confidence, 2)
+       << " disagrees with the others: tracking followed it all the same.</p>\n";
+  if (!record.warning.empty()) html << "<p style=\"color:#b00\"><b>Warning:</b> " << Escape(record.warning) << "</p>\n";
+  html << "<table><tr><th>camera</th><th>mean confidence</th></tr>\n";
+  for (std::size_t c = 0; c < record.camera_names.size(); ++c) {
+    const bool low = record.camera_confidence[c] < record.min_confidence;
+    html << "<tr><td style=\"text-align:left\">" << Escape(record.camera_names[c]) << "</td><td"
+         << (low ? " style=\"color:#b00\"" : "") << ">" << Fixed(record.camera_confidence[c], 3) << "</td></tr>\n";
+  }
+  html << "</table>\n";
+  if (!record.low_frames.empty())
+    html << "<p><b>" << record.low_frames.size() << " camera-frames below " << Fixed(record.min_confidence, 2)
+         << ":</b> " << Escape(LowConfidenceList(record, 1 << 20)) << "</p>\n";
+  return html.str();
+}
+
 std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, const Rig& rig,
                        const std::vector<int>& heldout) {
   std::ostringstream html;
@@ -142,6 +168,7 @@ std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, c
           "two silhouettes, and the share of the squared error in the union that falls on pixels only one of them "
           "covers.</p>\n";
   for (const std::string& warning : summary.warnings) html << "<p><b>Warning:</b> " << Escape(warning) << "</p>\n";
+  html << SilhouetteConfidenceHtml(run);
   if (fs::exists(run.VideoPath("orbit")))
     html << "<h2>3D video</h2>\n<video controls width=\"960\" src=\"renders/orbit.mp4\"></video>\n";
   html << "<h2>Per frame</h2>\n<img src=\"plots/iou_per_frame.png\"><br><img src=\"plots/psnr_per_frame.png\">\n";

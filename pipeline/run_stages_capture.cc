@@ -1,11 +1,13 @@
 // The capture-side stages of `confluent run`: silhouettes and tracking.
 
+#include <cstdio>
 #include <algorithm>
 #include <filesystem>
 #include <map>
 #include <mutex>
 
 #include "pipeline/run_stages.h"
+#include "pipeline/mask_confidence.h"
 #include "core/bvh_io.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -26,19 +28,38 @@ std::string RunMaskPath(const RunInputs& inputs, int camera, int frame) {
 namespace {
 
 // The masks the tracker will read, checked against each other through the calibration on a
-// sample of frames (silhouette/multiview.h): when they cannot be trusted, the stage's first note
-// says so before tracking starts.
-void WarnUntrustedMasks(const RunInputs& inputs, StageReport* report) {
+// sample of frames (silhouette/multiview.h).
+MaskTrust AssessRunMasks(const RunInputs& inputs) {
   std::vector<int> frames;
   for (int k : EvenFrameSample(inputs.frames.size(), 12)) frames.push_back(inputs.frames.first + k);
-  const MaskTrust trust = AssessMaskTrust(
+  return AssessMaskTrust(
       inputs.capture->rig(), frames,
       [&](int camera, int frame) {
         const std::string path = RunMaskPath(inputs, camera, frame);
         return inputs.cameras.is_used(camera) && fs::exists(path) ? ReadMaskFile(path) : Image();
       },
       MultiViewOptions{});
-  if (!trust.warning.empty()) report->notes.insert(report->notes.begin(), "warning: " + trust.warning);
+}
+
+// RUN/mask_confidence.json: the masks on disk assessed on a sample of frames, written when the
+// stage made masks or the record is missing (so a resumed run writes what an uninterrupted one
+// does, and a finished run rewrites nothing). Says before tracking starts what it holds: when the
+// masks cannot be trusted, the stage's first note (`known_warning`, from checking every
+// camera-frame as it was made, takes precedence); the low-confidence camera-frames, a later one.
+void RecordMaskTrust(const RunInputs& inputs, bool masks_made, const std::string& known_warning, StageReport* report) {
+  const std::string path = inputs.folder.Path("mask_confidence.json");
+  if (masks_made || !fs::exists(path))
+    WriteMaskConfidence(path, inputs.capture->rig(), AssessRunMasks(inputs), MultiViewOptions().min_confidence,
+                        "sample");
+  const MaskConfidenceRecord record = ReadMaskConfidence(path);
+  const std::string& warning = known_warning.empty() ? record.warning : known_warning;
+  if (!warning.empty()) report->notes.insert(report->notes.begin(), "warning: " + warning);
+  if (!record.low_frames.empty()) {
+    char head[160];
+    std::snprintf(head, sizeof head, "%zu of %d sampled camera-frames below confidence %.2f: ", record.low_frames.size(),
+                  record.camera_frames, record.min_confidence);
+    report->notes.push_back(head + LowConfidenceList(record) + " (" + path + ")");
+  }
 }
 
 }  // namespace
@@ -53,7 +74,7 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
         throw InputError(RunMaskPath(inputs, c, inputs.frames.first), "mask file not found (given --masks folder)");
     report.skipped = inputs.frames.size();
     report.notes.push_back("masks given: " + inputs.masks_dir);
-    WarnUntrustedMasks(inputs, &report);
+    RecordMaskTrust(inputs, false, "", &report);
     return report;
   }
   // Per camera, the first frame whose mask is missing: a resumed run continues each camera there.
@@ -72,7 +93,7 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
   }
   report.skipped = frames_done - inputs.frames.first;
   if (frames_done == inputs.frames.end) {
-    WarnUntrustedMasks(inputs, &report);
+    RecordMaskTrust(inputs, false, "", &report);
     return report;
   }
 
@@ -101,10 +122,7 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
   report.computed = inputs.frames.end - frames_done;
   report.seconds = NowSeconds() - start;
   timings->Save();
-  if (!summary.trust.warning.empty())  // the masks just made, every frame checked
-    report.notes.insert(report.notes.begin(), "warning: " + summary.trust.warning);
-  else
-    WarnUntrustedMasks(inputs, &report);  // a resumed run: earlier masks too
+  RecordMaskTrust(inputs, true, summary.trust.warning, &report);
   return report;
 }
 

@@ -133,7 +133,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
   for (int c = 0; c < num_cameras; ++c) total += static_cast<std::size_t>(end_frame - resume(c));
   std::vector<double> previous_fraction(num_cameras, -1.0);  // of the corrected masks
   const MultiViewOptions& multiview = options.plate_free.multiview;
-  std::vector<std::pair<int, double>> confidences;  // of the camera-frames reaching the sink
+  std::vector<CameraFrameConfidence> confidences;  // of the camera-frames reaching the sink
   for (int f = start; f < end_frame; ++f) {
     std::vector<Image> images(num_cameras), masks(num_cameras);
     std::vector<MaskSummary> checks(num_cameras);
@@ -190,7 +190,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
       if (check.empty) check.confidence = 0;
       check.low_confidence = check.confidence < multiview.min_confidence;
       summary.masks[static_cast<std::size_t>(c) * num_frames + (f - first_frame)] = check;
-      if (f >= resume(c) && !excluded(c)) confidences.emplace_back(c, check.confidence);
+      if (f >= resume(c) && !excluded(c)) confidences.push_back({c, f, check.confidence});
     }
     ParallelFor(num_cameras, options.threads, [&](int c) {
       if (f < resume(c)) return;

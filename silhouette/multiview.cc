@@ -169,14 +169,17 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   return result;
 }
 
-MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<std::pair<int, double>>& confidences,
+MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<CameraFrameConfidence>& confidences,
                              double min_confidence) {
   const int n = rig.size();
   MaskTrust trust;
   std::vector<double> sum(n, 0.0);
   std::vector<int> count(n, 0);
   double total = 0;
-  for (const auto& [camera, confidence] : confidences) {
+  trust.checked = confidences;
+  for (const CameraFrameConfidence& entry : confidences) {
+    const int camera = entry.camera;
+    const double confidence = entry.confidence;
     if (camera < 0 || camera >= n) throw UsageError("SummarizeMaskTrust: camera index out of range");
     ++trust.camera_frames;
     trust.low_confidence += confidence < min_confidence;
@@ -214,13 +217,13 @@ MaskTrust AssessMaskTrust(const Rig& rig, const std::vector<int>& frames,
                           const std::function<Image(int camera, int frame)>& read_mask, const MultiViewOptions& options) {
   options.Check();
   const int n = rig.size();
-  std::vector<std::pair<int, double>> confidences;
+  std::vector<CameraFrameConfidence> confidences;
   for (int frame : frames) {
     std::vector<Image> masks(n);
     for (int c = 0; c < n; ++c) masks[c] = read_mask(c, frame);
     const std::vector<ViewConsistency> views = CheckMultiView(rig, &masks, {}, options);
     for (int c = 0; c < n; ++c)
-      if (!masks[c].empty()) confidences.emplace_back(c, views[c].confidence);
+      if (!masks[c].empty()) confidences.push_back({c, frame, views[c].confidence});
   }
   return SummarizeMaskTrust(rig, confidences, options.min_confidence);
 }

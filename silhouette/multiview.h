@@ -55,8 +55,16 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
                                             std::vector<Image>* strict_hulls = nullptr);
 
 // How far a set of masks can be trusted, from a sample of frames.
+// One checked camera-frame.
+struct CameraFrameConfidence {
+  int camera = 0;  // rig index
+  int frame = 0;
+  double confidence = 1;
+};
+
 struct MaskTrust {
   int camera_frames = 0;                 // checked
+  std::vector<CameraFrameConfidence> checked;  // each checked camera-frame, in the order given
   int low_confidence = 0;                // of them below options.min_confidence
   double mean_confidence = 1;
   std::vector<double> camera_confidence;  // mean per camera (rig order; 1 for cameras not checked)
@@ -64,10 +72,10 @@ struct MaskTrust {
   std::string warning;
 };
 
-// Summarises confidences given as (camera index, confidence) per camera-frame: the counts, the
-// means, and the warning (set when more than a tenth of the camera-frames, or any camera on
-// average, falls below `min_confidence`).
-MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<std::pair<int, double>>& confidences,
+// Summarises the confidences of checked camera-frames: the counts, the means, and the warning
+// (set when more than a tenth of the camera-frames, or any camera on average, falls below
+// `min_confidence`).
+MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<CameraFrameConfidence>& confidences,
                              double min_confidence);
 
 // Reads the masks of `frames` through `read_mask(camera, frame)` (an empty image: no mask for

@@ -179,6 +179,15 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
                            "plots/error_heatmap_holdout0.png", "evaluation/holdout1/000000.png"})
     EXPECT_TRUE(fs::exists(fs::path(run) / file)) << file;
   EXPECT_NE(evaluate.stdout_text.find("held-out evaluation"), std::string::npos);
+  // The silhouettes' confidence: the 10 frames of the 4 tracking cameras checked (the sample is
+  // the whole of so short a run), and shown in the report.
+  const nlohmann::json trust = nlohmann::json::parse(std::ifstream(run + "/mask_confidence.json"));
+  EXPECT_EQ(trust["source"], "sample");
+  EXPECT_EQ(trust["camera_frames"], 40);
+  EXPECT_GT(trust["mean_confidence"].get<double>(), 0.8);
+  std::ifstream report_file(run + "/report.html");
+  const std::string report((std::istreambuf_iterator<char>(report_file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(report.find("<h2>Silhouette confidence</h2>"), std::string::npos);
 
   // The views are scored over the held-out cameras' clean plates (the synthetic capture has them),
   // with the input colours matched to each held-out camera's response and the outline matted.

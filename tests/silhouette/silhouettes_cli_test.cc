@@ -5,9 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <set>
 
 #include <opencv2/imgproc.hpp>
 
@@ -116,6 +119,21 @@ TEST(SilhouettesCli, RunWarnsBeforeTrackingWhenGivenMasksDisagreeBetweenCameras)
   const std::size_t tracking = run.stdout_text.find("\ntracking ");
   if (tracking != std::string::npos) EXPECT_LT(warning, tracking) << run.stdout_text;
   EXPECT_NE(run.stdout_text.find("--masks", warning), std::string::npos) << run.stdout_text;
+  // The camera-frames themselves: in the log and in RUN/mask_confidence.json (report.html shows it).
+  EXPECT_NE(run.stdout_text.find("cam02 frames 0-1"), std::string::npos) << run.stdout_text;
+  const nlohmann::json record = nlohmann::json::parse(std::ifstream(dir / "run/mask_confidence.json"));
+  EXPECT_EQ(record["source"], "sample");
+  EXPECT_EQ(record["camera_frames"], 8);  // 2 frames x the 4 tracking cameras
+  std::set<std::string> low;
+  for (const auto& entry : record["low"]) {
+    low.insert(entry["camera"].get<std::string>() + "/" + std::to_string(entry["frame"].get<int>()));
+    EXPECT_LT(entry["confidence"].get<double>(), 0.8);
+  }
+  for (const char* bad : {"cam01/0", "cam01/1", "cam02/0", "cam02/1"}) EXPECT_EQ(low.count(bad), 1u) << record.dump(1);
+  for (const auto& camera : record["cameras"])
+    if (camera["name"] == "cam02") {
+      EXPECT_LT(camera["mean_confidence"].get<double>(), 0.8);
+    }
 }
 
 // Issue 20, part 4: a calibration that gives the sensor's rows (a few more than the images
