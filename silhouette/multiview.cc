@@ -25,6 +25,13 @@ void MultiViewOptions::Check() const {
 
 namespace {
 
+// The median of `values` (not empty).
+double Median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+
 cv::Mat Disk(int radius) {
   return cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
 }
@@ -82,8 +89,7 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   std::vector<Image> projected, strict;
   VisualHullConsistency(rig, carving, {}, hull_options, &projected);
   std::vector<cv::Mat> near_hulls(n);
-  std::vector<Image> strict_carving = carving;
-  bool excluded = false;
+  std::vector<double> explained(n, 1.0), explained_list;
   for (int c = 0; c < n; ++c) {
     if ((*masks)[c].empty()) continue;
     const cv::Mat hull = AsCvMat(projected[c]);
@@ -93,11 +99,19 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
     cv::Mat both;
     cv::bitwise_and(m, near_hulls[c], both);
     const double area = cv::countNonZero(m);
-    if (area > 0 && cv::countNonZero(both) < 0.9 * area) {
+    explained[c] = area > 0 ? cv::countNonZero(both) / area : 0.0;
+    explained_list.push_back(explained[c]);
+  }
+  // The hull's own coarseness leaves every camera's thin parts a little unexplained (a small
+  // performer at a low resolution): a camera is judged against the frame's typical camera.
+  const double typical_explained = std::max(0.5, Median(explained_list));
+  std::vector<Image> strict_carving = carving;
+  bool excluded = false;
+  for (int c = 0; c < n; ++c)
+    if (!(*masks)[c].empty() && explained[c] < 0.9 * typical_explained) {
       std::fill(strict_carving[c].data.begin(), strict_carving[c].data.end(), 255);
       excluded = true;
     }
-  }
   if (hull_options.tolerated_rejections > 0 || excluded) {
     hull_options.tolerated_rejections = 0;
     VisualHullConsistency(rig, strict_carving, {}, hull_options, &strict);
@@ -150,16 +164,13 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   }
   // A hull is larger than the silhouette (concavities, few cameras): coverage counts relative to
   // the frame's typical camera.
-  std::vector<double> sorted = covered_list;
-  double typical = 1;
-  if (!sorted.empty()) {
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    typical = std::max(0.5, sorted[sorted.size() / 2]);
-  }
+  const double typical = covered_list.empty() ? 1.0 : std::max(0.5, Median(covered_list));
   for (int c = 0; c < n; ++c) {
     if ((*masks)[c].empty()) continue;
     ViewConsistency& view = result[c];
-    view.confidence = view.explained <= 0 ? 0.0 : std::clamp(std::min(view.explained, view.covered / typical), 0.0, 1.0);
+    view.confidence = view.explained <= 0 ? 0.0
+                                          : std::clamp(std::min(view.explained / typical_explained, view.covered / typical),
+                                                       0.0, 1.0);
   }
   for (int c = 0; c < n; ++c) {
     if ((*masks)[c].empty()) continue;
