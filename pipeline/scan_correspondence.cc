@@ -1,5 +1,7 @@
 #include "pipeline/scan_correspondence.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -11,8 +13,20 @@ namespace confluent {
 namespace {
 
 // The first tracked frame's template is kept as the scan's reference pose when its residual is
-// within this factor of the registration fitted from it.
+// within this factor of the fitted registration's, and no segment of it is further than
+// kAsTrackedSegmentExcessM off the scan than the fit's (a tracked arm 2 cm off a scan that the
+// body as a whole fits well is an error of the tracker, not the scan's pose).
 constexpr double kAsTrackedTolerance = 1.25;
+constexpr double kAsTrackedSegmentExcessM = 0.01;
+
+// The largest excess of `a`'s per-segment rms over `b`'s, in metres.
+double WorstSegmentExcessM(const ScanRegistration& a, const ScanRegistration& b) {
+  double worst = 0.0;
+  for (std::size_t s = 0; s < a.segment_rms_m.size() && s < b.segment_rms_m.size(); ++s)
+    if (std::isfinite(a.segment_rms_m[s]) && std::isfinite(b.segment_rms_m[s]))
+      worst = std::max(worst, a.segment_rms_m[s] - b.segment_rms_m[s]);
+  return worst * a.metres_per_unit;
+}
 
 std::string Centimetres(double metres) {
   char text[32];
@@ -54,9 +68,10 @@ ScanRegistration RegisterSeeded(const BodyTemplate& body, const Mesh& scan, cons
   // The scan stands in the first frame's pose, and the tracked template fits it about as well as
   // a fit to the scan does: frame 0's template itself is the reference, so that frame 0 of the
   // animated scan is the scan and later frames move by what the tracker saw move.
-  const double fitted_rms = first_fits_better ? from_first_frame->rms_residual_m
-                                              : from_seed ? from_seed->rms_residual_m : 0.0;
-  if (as_tracked && as_tracked->rms_residual_m <= kAsTrackedTolerance * fitted_rms) {
+  const ScanRegistration* fitted = first_fits_better ? &*from_first_frame : from_seed ? &*from_seed : nullptr;
+  const double fitted_rms = fitted ? fitted->rms_residual_m : 0.0;
+  if (as_tracked && as_tracked->rms_residual_m <= kAsTrackedTolerance * fitted_rms &&
+      WorstSegmentExcessM(*as_tracked, *fitted) <= kAsTrackedSegmentExcessM) {
     as_tracked->warnings.push_back("the scan stands in the first tracked frame's pose: that frame's template is the "
                                    "reference (rms " + Centimetres(as_tracked->rms_residual_m) + ", fitted " +
                                    Centimetres(fitted_rms) + ")");

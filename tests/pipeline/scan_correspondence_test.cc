@@ -127,6 +127,25 @@ TEST(ScanCorrespondence, ScanInTheFirstTrackedPoseIsReproducedAtFrameZero) {
   const RowMatrixX3d animated = motion.Deform(frame0.vertices);
   EXPECT_LT((animated - scan.vertices).rowwise().norm().maxCoeff(), 1e-4);  // frame 0 is the scan
 
+  // The tracker's first frame with the right forearm bent further than the scan's: the body as a
+  // whole still fits the scan about as well as a fit does, but that arm does not. The tracker
+  // erred there, so the fit to the scan is the reference.
+  TemplatePose bent = tracked;
+  bent.dofs[kJointRightElbow][0] += 0.15;
+  ScanRegistrationOptions as_is = fit;
+  as_is.initial_pose = bent;
+  as_is.rounds = 0;
+  ScanRegistrationOptions from_bent = fit;
+  from_bent.initial_pose = bent;
+  const double bent_rms = RegisterTemplateToScan(body, scan, as_is, "held.ply").rms_residual_m;
+  const double fitted_rms = RegisterTemplateToScan(body, scan, from_bent, "held.ply").rms_residual_m;
+  ASSERT_LT(bent_rms, 1.25 * fitted_rms);  // the whole-body test alone would take it
+  options.first_tracked_pose = bent;
+  const ScanCorrespondence not_bent = CorrespondTemplateToScan(body, scan, "held.ply", options);
+  for (const std::string& warning : not_bent.registration.warnings)
+    EXPECT_EQ(warning.find("that frame's template is the reference"), std::string::npos) << warning;
+  EXPECT_GT((not_bent.reference.vertices - body.PosedMesh(shape, bent).vertices).cwiseAbs().maxCoeff(), 0.01);
+
   // The tracker's first frame with the arms raised: the scan is not in it; registered instead.
   TemplatePose raised = tracked;
   raised.dofs[kJointLeftShoulder][1] += 1.0;
