@@ -134,9 +134,13 @@ std::string SilhouetteConfidenceHtml(const RunFolder& run) {
   if (!record.warning.empty()) html << "<p style=\"color:#b00\"><b>Warning:</b> " << Escape(record.warning) << "</p>\n";
   html << "<table><tr><th>camera</th><th>mean confidence</th></tr>\n";
   for (std::size_t c = 0; c < record.camera_names.size(); ++c) {
+    html << "<tr><td style=\"text-align:left\">" << Escape(record.camera_names[c]) << "</td>";
+    if (record.camera_checked[c] == 0) {
+      html << "<td>not checked (held out)</td></tr>\n";
+      continue;
+    }
     const bool low = record.camera_confidence[c] < record.min_confidence;
-    html << "<tr><td style=\"text-align:left\">" << Escape(record.camera_names[c]) << "</td><td"
-         << (low ? " style=\"color:#b00\"" : "") << ">" << Fixed(record.camera_confidence[c], 3) << "</td></tr>\n";
+    html << "<td" << (low ? " style=\"color:#b00\"" : "") << ">" << Fixed(record.camera_confidence[c], 3) << "</td></tr>\n";
   }
   html << "</table>\n";
   if (!record.low_frames.empty())

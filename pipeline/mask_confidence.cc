@@ -18,10 +18,13 @@ void WriteMaskConfidence(const std::string& path, const Rig& rig, const MaskTrus
   json["camera_frames"] = trust.camera_frames;
   json["num_low_confidence"] = trust.low_confidence;
   json["warning"] = trust.warning;
+  std::vector<int> checked(rig.size(), 0);
+  for (const CameraFrameConfidence& entry : trust.checked) ++checked.at(entry.camera);
   json["cameras"] = nlohmann::json::array();
   for (int c = 0; c < rig.size(); ++c)
     json["cameras"].push_back(
         {{"name", rig.cameras[c].name},
+         {"checked", checked[c]},
          {"mean_confidence", c < static_cast<int>(trust.camera_confidence.size()) ? trust.camera_confidence[c] : 1.0}});
   json["low"] = nlohmann::json::array();
   for (const CameraFrameConfidence& entry : trust.checked)
@@ -43,6 +46,7 @@ MaskConfidenceRecord ReadMaskConfidence(const std::string& path) {
     for (const auto& camera : json.at("cameras")) {
       record.camera_names.push_back(camera.at("name").get<std::string>());
       record.camera_confidence.push_back(camera.at("mean_confidence").get<double>());
+      record.camera_checked.push_back(camera.at("checked").get<int>());
     }
     for (const auto& low : json.at("low")) {
       record.low_camera_names.push_back(low.at("camera").get<std::string>());

@@ -19,6 +19,7 @@ struct MaskConfidenceRecord {
   int camera_frames = 0;   // checked
   std::vector<std::string> camera_names;   // rig order
   std::vector<double> camera_confidence;   // mean per camera (1 for cameras not checked)
+  std::vector<int> camera_checked;         // camera-frames checked per camera (0: held out, or no mask)
   std::vector<std::string> low_camera_names;  // per camera-frame below min_confidence ...
   std::vector<int> low_frames;                // ... its frame ...
   std::vector<double> low_confidence;         // ... and its confidence

@@ -188,6 +188,10 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
   std::ifstream report_file(run + "/report.html");
   const std::string report((std::istreambuf_iterator<char>(report_file)), std::istreambuf_iterator<char>());
   EXPECT_NE(report.find("<h2>Silhouette confidence</h2>"), std::string::npos);
+  for (const auto& camera : trust["cameras"])  // the held-out cameras are kept out of the check
+    EXPECT_EQ(camera["checked"].get<int>(), camera["name"].get<std::string>().rfind("holdout", 0) == 0 ? 0 : 10)
+        << camera.dump();
+  EXPECT_NE(report.find("<td>not checked (held out)</td>"), std::string::npos);
 
   // The views are scored over the held-out cameras' clean plates (the synthetic capture has them),
   // with the input colours matched to each held-out camera's response and the outline matted.

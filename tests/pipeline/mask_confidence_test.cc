@@ -40,6 +40,7 @@ TEST(MaskConfidence, RoundTripsAndListsTheLowCameraFramesAsRanges) {
   EXPECT_EQ(record.camera_frames, 18);
   EXPECT_EQ(record.camera_names, (std::vector<std::string>{"cam00", "cam01", "cam02"}));
   EXPECT_NEAR(record.camera_confidence[2], (4 * 0.3 + 2 * 0.85) / 6, 1e-12);
+  EXPECT_EQ(record.camera_checked, (std::vector<int>{6, 6, 6}));
   EXPECT_EQ(record.low_frames.size(), 5u);
   EXPECT_EQ(record.warning, trust.warning);
   EXPECT_FALSE(record.warning.empty());  // cam02's mean is below 0.8
