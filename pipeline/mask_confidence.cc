@@ -9,28 +9,48 @@
 
 namespace confluent {
 
-void WriteMaskConfidence(const std::string& path, const Rig& rig, const MaskTrust& trust, double min_confidence,
-                         const std::string& source) {
-  nlohmann::json json;
-  json["source"] = source;
-  json["min_confidence"] = min_confidence;
-  json["mean_confidence"] = trust.mean_confidence;
-  json["camera_frames"] = trust.camera_frames;
-  json["num_low_confidence"] = trust.low_confidence;
-  json["warning"] = trust.warning;
-  std::vector<int> checked(rig.size(), 0);
-  for (const CameraFrameConfidence& entry : trust.checked) ++checked.at(entry.camera);
-  json["cameras"] = nlohmann::json::array();
-  for (int c = 0; c < rig.size(); ++c)
-    json["cameras"].push_back(
-        {{"name", rig.cameras[c].name},
-         {"checked", checked[c]},
-         {"mean_confidence", c < static_cast<int>(trust.camera_confidence.size()) ? trust.camera_confidence[c] : 1.0}});
-  json["low"] = nlohmann::json::array();
+MaskConfidenceRecord MakeMaskConfidenceRecord(const Rig& rig, const MaskTrust& trust, double min_confidence,
+                                              const std::string& source) {
+  MaskConfidenceRecord record;
+  record.source = source;
+  record.min_confidence = min_confidence;
+  record.mean_confidence = trust.mean_confidence;
+  record.camera_frames = trust.camera_frames;
+  record.warning = trust.warning;
+  record.camera_checked.assign(rig.size(), 0);
+  for (const CameraFrameConfidence& entry : trust.checked) ++record.camera_checked.at(entry.camera);
+  for (int c = 0; c < rig.size(); ++c) {
+    record.camera_names.push_back(rig.cameras[c].name);
+    record.camera_confidence.push_back(c < static_cast<int>(trust.camera_confidence.size()) ? trust.camera_confidence[c]
+                                                                                              : 1.0);
+  }
   for (const CameraFrameConfidence& entry : trust.checked)
-    if (entry.confidence < min_confidence)
-      json["low"].push_back(
-          {{"camera", rig.cameras[entry.camera].name}, {"frame", entry.frame}, {"confidence", entry.confidence}});
+    if (entry.confidence < min_confidence) {
+      record.low_camera_names.push_back(rig.cameras[entry.camera].name);
+      record.low_frames.push_back(entry.frame);
+      record.low_confidence.push_back(entry.confidence);
+    }
+  return record;
+}
+
+void WriteMaskConfidence(const std::string& path, const MaskConfidenceRecord& record) {
+  nlohmann::json json;
+  json["source"] = record.source;
+  json["min_confidence"] = record.min_confidence;
+  json["mean_confidence"] = record.mean_confidence;
+  json["camera_frames"] = record.camera_frames;
+  json["num_low_confidence"] = record.low_frames.size();
+  json["warning"] = record.warning;
+  json["cameras"] = nlohmann::json::array();
+  for (std::size_t c = 0; c < record.camera_names.size(); ++c)
+    json["cameras"].push_back({{"name", record.camera_names[c]},
+                               {"checked", record.camera_checked[c]},
+                               {"mean_confidence", record.camera_confidence[c]}});
+  json["low"] = nlohmann::json::array();
+  for (std::size_t i = 0; i < record.low_frames.size(); ++i)
+    json["low"].push_back({{"camera", record.low_camera_names[i]},
+                           {"frame", record.low_frames[i]},
+                           {"confidence", record.low_confidence[i]}});
   WriteTextFile(path, json.dump(1) + "\n");
 }
 

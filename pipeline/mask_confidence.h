@@ -26,9 +26,12 @@ struct MaskConfidenceRecord {
   std::string warning;     // "" when the masks can be trusted
 };
 
-// Writes `trust` (from SummarizeMaskTrust / AssessMaskTrust) to `path` atomically. Throws OutputError.
-void WriteMaskConfidence(const std::string& path, const Rig& rig, const MaskTrust& trust, double min_confidence,
-                         const std::string& source);
+// The record of `trust` (from SummarizeMaskTrust / AssessMaskTrust) for `rig`.
+MaskConfidenceRecord MakeMaskConfidenceRecord(const Rig& rig, const MaskTrust& trust, double min_confidence,
+                                              const std::string& source);
+
+// Writes `record` to `path` atomically. Throws OutputError.
+void WriteMaskConfidence(const std::string& path, const MaskConfidenceRecord& record);
 
 // Reads a file WriteMaskConfidence wrote. Throws InputError naming the file when it is malformed.
 MaskConfidenceRecord ReadMaskConfidence(const std::string& path);

@@ -48,10 +48,14 @@ MaskTrust AssessRunMasks(const RunInputs& inputs) {
 // camera-frame as it was made, takes precedence); the low-confidence camera-frames, a later one.
 void RecordMaskTrust(const RunInputs& inputs, bool masks_made, const std::string& known_warning, StageReport* report) {
   const std::string path = inputs.folder.Path("mask_confidence.json");
-  if (masks_made || !fs::exists(path))
-    WriteMaskConfidence(path, inputs.capture->rig(), AssessRunMasks(inputs), MultiViewOptions().min_confidence,
-                        "sample");
-  const MaskConfidenceRecord record = ReadMaskConfidence(path);
+  MaskConfidenceRecord record;
+  if (masks_made || !fs::exists(path)) {
+    record = MakeMaskConfidenceRecord(inputs.capture->rig(), AssessRunMasks(inputs), MultiViewOptions().min_confidence,
+                                      "sample");
+    WriteMaskConfidence(path, record);
+  } else {
+    record = ReadMaskConfidence(path);
+  }
   const std::string& warning = known_warning.empty() ? record.warning : known_warning;
   if (!warning.empty()) report->notes.insert(report->notes.begin(), "warning: " + warning);
   if (!record.low_frames.empty()) {

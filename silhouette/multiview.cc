@@ -31,7 +31,6 @@ double Median(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
-
 cv::Mat Disk(int radius) {
   return cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
 }
@@ -89,7 +88,7 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   std::vector<Image> projected, strict;
   VisualHullConsistency(rig, carving, {}, hull_options, &projected);
   std::vector<cv::Mat> near_hulls(n);
-  std::vector<double> explained(n, 1.0), explained_list;
+  std::vector<double> explained(n, 1.0), explained_area(n, 0.0), explained_list;
   for (int c = 0; c < n; ++c) {
     if ((*masks)[c].empty()) continue;
     const cv::Mat hull = AsCvMat(projected[c]);
@@ -99,7 +98,8 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
     cv::Mat both;
     cv::bitwise_and(m, near_hulls[c], both);
     const double area = cv::countNonZero(m);
-    explained[c] = area > 0 ? cv::countNonZero(both) / area : 0.0;
+    explained_area[c] = cv::countNonZero(both);
+    explained[c] = area > 0 ? explained_area[c] / area : 0.0;
     explained_list.push_back(explained[c]);
   }
   // The hull's own coarseness leaves every camera's thin parts a little unexplained (a small
@@ -131,12 +131,10 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
     const cv::Mat tight = AsCvMat(strict[c]);
     const double hull_area = cv::countNonZero(tight);
     cv::Mat both;
-    cv::bitwise_and(m, near_hull, both);
-    const double explained_area = cv::countNonZero(both);
     cv::bitwise_and(m, tight, both);
     const double covered_area = cv::countNonZero(both);
     ViewConsistency& view = result[c];
-    view.explained = area > 0 ? explained_area / area : 0.0;
+    view.explained = explained[c];
     // An empty strict hull (some camera sees nothing) leaves nothing to cover.
     view.covered = hull_area > 0 ? covered_area / hull_area : 1.0;
     covered_list.push_back(view.covered);
@@ -144,7 +142,7 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
       // Ghosts: the mask where no other camera's hull comes near.
       cv::Mat corrected;
       cv::bitwise_and(m, near_hull, corrected);
-      view.removed = static_cast<int>(area - explained_area);
+      view.removed = static_cast<int>(area - explained_area[c]);
       // Holes: deep inside the hull and enclosed by the mask (its closing).
       const int deep = ScaledRadius(options.hole_margin, width), close = ScaledRadius(options.hole_close, width);
       cv::Mat inner, closed;

@@ -34,7 +34,7 @@ TEST(MaskConfidence, RoundTripsAndListsTheLowCameraFramesAsRanges) {
   const MaskTrust trust = SummarizeMaskTrust(rig, checked, 0.8);
   testing::TempDir dir;
   const std::string path = dir / "mask_confidence.json";
-  WriteMaskConfidence(path, rig, trust, 0.8, "sample");
+  WriteMaskConfidence(path, MakeMaskConfidenceRecord(rig, trust, 0.8, "sample"));
   const MaskConfidenceRecord record = ReadMaskConfidence(path);
   EXPECT_EQ(record.source, "sample");
   EXPECT_EQ(record.camera_frames, 18);
