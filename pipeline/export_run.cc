@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/statistics.h"
 #include "core/atomic_file.h"
 #include "core/cv_interop.h"
 #include "core/error.h"
@@ -204,7 +205,7 @@ ExportSummary ExportRun(const FinishedRun& finished, const Capture& capture, con
                    static_cast<std::size_t>(range.size()), "frame " + std::to_string(frame));
   }
   if (cache) cache->Finish();
-  summary.median_bake_ms = MedianTiming(bake_ms);
+  summary.median_bake_ms = Median(bake_ms);
 
   ReportProgress(progress, "export: glTF", 0, stream ? 2 : 1);
   const double seconds = range.size() / summary.fps;

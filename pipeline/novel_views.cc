@@ -8,6 +8,7 @@
 
 #include "calib/easymocap_io.h"
 #include "calib/plate_colour.h"
+#include "core/statistics.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -242,8 +243,8 @@ NovelViewSummary RenderNovelViews(const FinishedRun& finished, const Capture& ca
   summary.width = first.width;
   summary.height = first.height;
   summary.texturing_cameras = static_cast<int>(used.size());
-  summary.median_setup_ms = MedianTiming(set_ms);
-  summary.median_render_ms = MedianTiming(render_ms);
+  summary.median_setup_ms = Median(set_ms);
+  summary.median_render_ms = Median(render_ms);
   if (video) {
     summary.video_path = video->path();
     summary.video_frames = video->frames_written();

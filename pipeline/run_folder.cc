@@ -94,12 +94,6 @@ double TimingLog::StageSeconds(const std::string& stage) const {
   return sum;
 }
 
-double MedianTiming(std::vector<double> timings) {
-  if (timings.empty()) return 0.0;
-  std::nth_element(timings.begin(), timings.begin() + timings.size() / 2, timings.end());
-  return timings[timings.size() / 2];
-}
-
 double NowSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }

@@ -51,7 +51,4 @@ class TimingLog {
 // A monotonic clock in seconds, for stage and frame timings.
 double NowSeconds();
 
-// The median of per-frame timings, in any unit (the upper one of an even count); 0 for none.
-double MedianTiming(std::vector<double> timings);
-
 }  // namespace confluent

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
 
+#include "core/statistics.h"
 #include "calib/rig_check.h"
 #include "core/cv_interop.h"
 #include "core/error.h"
@@ -24,12 +25,6 @@ void MultiViewOptions::Check() const {
 }
 
 namespace {
-
-// The median of `values` (not empty).
-double Median(std::vector<double> values) {
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
 
 cv::Mat Disk(int radius) {
   return cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));

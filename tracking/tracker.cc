@@ -12,6 +12,7 @@
 
 #include "calib/camera.h"
 #include "calib/rig_check.h"
+#include "core/statistics.h"
 #include "core/error.h"
 #include "silhouette/overlap.h"
 #include "tracking/limb_hypotheses.h"
@@ -31,12 +32,6 @@ Matrix3d RotationOf(const Vector3d& aa) {
 Vector3d RotationVector(const Matrix3d& R) {
   const Eigen::AngleAxisd aa(R);
   return aa.angle() * aa.axis();
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 std::size_t HashMask(const Image& mask) {
