@@ -10,6 +10,7 @@
 
 #include "calib/easymocap_io.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/image_io.h"
 #include "core/video.h"
 
@@ -221,6 +222,12 @@ Image Capture::ReadFrame(int camera, int frame) const {
   return it->second.ReadFrame(frame);
 }
 
+std::vector<Image> Capture::ReadFrames(const std::vector<int>& cameras, int frame, int threads) const {
+  std::vector<Image> images(cameras.size());
+  ParallelFor(static_cast<int>(cameras.size()), threads, [&](int i) { images[i] = ReadFrame(cameras[i], frame); });
+  return images;
+}
+
 std::string Capture::MaskPath(int camera, int frame) const {
   char name[16];
   std::snprintf(name, sizeof name, "%06d.png", frame);
@@ -235,9 +242,12 @@ Image Capture::ReadMask(int camera, int frame) const {
 }
 
 Image ReadMaskFile(const std::string& path) {
-  const Image rgb = ToRgb8(ReadImage(path));
-  Image mask(rgb.width, rgb.height, 1);
-  for (std::size_t i = 0; i < mask.data.size(); ++i) mask.data[i] = rgb.data[3 * i] >= 128 ? 255 : 0;
+  Image read = ReadImage(path);
+  // The first channel decides; 8-bit files are read as they are, deeper ones through ToRgb8.
+  if (read.type != PixelType::kUInt8) read = ToRgb8(read);
+  Image mask(read.width, read.height, 1);
+  const std::size_t stride = read.channels;
+  for (std::size_t i = 0; i < mask.data.size(); ++i) mask.data[i] = read.data[stride * i] >= 128 ? 255 : 0;
   return mask;
 }
 

@@ -54,6 +54,8 @@ class Capture {
   std::string FramePath(int camera, int frame) const;
   // Frame as 8-bit RGB (grey and RGBA images are converted). Throws InputError naming the file.
   Image ReadFrame(int camera, int frame) const;
+  // ReadFrame of each of `cameras` at `frame`, decoded on up to `threads` threads, in order.
+  std::vector<Image> ReadFrames(const std::vector<int>& cameras, int frame, int threads) const;
 
   // Precomputed masks (masks/<cam>/<frame>.png), present for every camera?
   bool has_masks() const { return has_masks_; }

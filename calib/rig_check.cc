@@ -307,6 +307,16 @@ double MaskIoU(const Image& a, const Image& b) {
   if (a.width != b.width || a.height != b.height) throw UsageError("MaskIoU: masks differ in size");
   long intersection = 0, union_count = 0;
   const std::size_t pixels = static_cast<std::size_t>(a.width) * a.height;
+  if (a.channels == 1 && b.channels == 1) {  // the common case, in a loop the compiler vectorises
+    const std::uint8_t* pa = a.data.data();
+    const std::uint8_t* pb = b.data.data();
+    for (std::size_t i = 0; i < pixels; ++i) {
+      const int in_a = pa[i] >> 7, in_b = pb[i] >> 7;
+      intersection += in_a & in_b;
+      union_count += in_a | in_b;
+    }
+    return union_count == 0 ? 1.0 : static_cast<double>(intersection) / union_count;
+  }
   for (std::size_t i = 0; i < pixels; ++i) {
     const bool in_a = a.data[i * a.channels] >= 128, in_b = b.data[i * b.channels] >= 128;
     intersection += in_a && in_b;

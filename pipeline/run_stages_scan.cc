@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"
+#include "core/parallel.h"
 #include "core/video_writer.h"
 #include "deform/confluent_motion.h"
 #include "deform/correspondences.h"
@@ -135,11 +136,12 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     std::vector<double> iou_after_frame;  // per used camera, after the last refinement
     if (refiner) {
       const double refine_start = NowSeconds();
-      for (int c : used_indices) {
-        const std::string path = RunMaskPath(inputs, c, frame);
+      masks.resize(used_indices.size());
+      ParallelFor(static_cast<int>(used_indices.size()), inputs.threads, [&](int i) {
+        const std::string path = RunMaskPath(inputs, used_indices[i], frame);
         if (!fs::exists(path)) throw InputError(path, "silhouette missing (the silhouette stage did not finish this frame)");
-        masks.push_back(ReadMaskFile(path));
-      }
+        masks[i] = ReadMaskFile(path);
+      });
       SilhouetteRefinementSummary refined;
       animated.vertices = refiner->Refine(animated.vertices, used_cameras, masks, &refined);
       for (std::size_t i = 0; i < used_cameras.size(); ++i)
@@ -149,8 +151,7 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     }
     if (photo_refiner) {
       const double photo_start = NowSeconds();
-      std::vector<Image> images;
-      for (int c : used_indices) images.push_back(inputs.capture->ReadFrame(c, frame));
+      const std::vector<Image> images = inputs.capture->ReadFrames(used_indices, frame, inputs.threads);
       PhotoRefinementSummary photo;
       animated.vertices = photo_refiner->Refine(animated.vertices, used_cameras, images, &photo);
       if (photo.rounds > 0) flow_before += photo.first_flow_px, flow_after += photo.last_flow_px, ++flow_frames;
@@ -239,12 +240,12 @@ StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& op
     for (int frame : todo) {
       const double frame_start = NowSeconds();
       const Mesh mesh = ReadMesh(geometry_path(frame));
-      std::vector<Image> images, masks;
-      for (int c : used) {
-        images.push_back(capture.ReadFrame(c, frame));
-        const std::string mask_path = RunMaskPath(inputs, c, frame);
-        masks.push_back(fs::exists(mask_path) ? ReadMaskFile(mask_path) : Image());
-      }
+      const std::vector<Image> images = capture.ReadFrames(used, frame, inputs.threads);
+      std::vector<Image> masks(used.size());
+      ParallelFor(static_cast<int>(used.size()), inputs.threads, [&](int i) {
+        const std::string mask_path = RunMaskPath(inputs, used[i], frame);
+        if (fs::exists(mask_path)) masks[i] = ReadMaskFile(mask_path);
+      });
       texturer.SetFrame(mesh.vertices, used_cameras, images, masks);
       const RenderResult result = texturer.Render(path[frame]);
       WriteImage(folder.RenderPath(options.view, frame), result.color);

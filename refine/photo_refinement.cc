@@ -8,10 +8,10 @@
 #include <opencv2/video/tracking.hpp>
 #include <stdexcept>
 #include <functional>
-#include <thread>
 
 #include "core/error.h"
 #include "core/mesh_ops.h"
+#include "core/parallel.h"
 #include "refine/normalised_diffusion.h"
 #include "render/cpu_raster.h"
 
@@ -198,6 +198,10 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
         (image.channels != 1 && image.channels != 3))
       throw std::invalid_argument("PhotoRefiner: image " + std::to_string(c) + " is not an 8-bit frame of camera " +
                                   camera.name + "'s size");
+  }
+  ParallelFor(num_views, s.options.threads, [&](int c) {
+    const Camera& camera = cameras[c];
+    const Image& image = images[c];
     const Image ideal = camera.has_distortion() ? UndistortImage(camera, image) : image;
     const cv::Mat wrapped(ideal.height, ideal.width, ideal.channels == 3 ? CV_8UC3 : CV_8UC1,
                           const_cast<std::uint8_t*>(ideal.data.data()));
@@ -208,7 +212,7 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
     views[c].centre = camera.center_in_world();
     views[c].inverse_depth.assign(static_cast<std::size_t>(camera.width) * camera.height, 0.0f);
     views[c].face_ids.assign(views[c].inverse_depth.size(), -1);
-  }
+  });
   PhotoRefinementSummary summary;
   RowMatrixX3d current = vertices;
   if (num_views < 2) {
@@ -228,12 +232,7 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
   }
   const int threads = std::max(1, std::min<int>(s.options.threads, pairs.size()));
   // Calls work(0) .. work(threads - 1) concurrently.
-  auto in_parallel = [threads](const std::function<void(int)>& work) {
-    std::vector<std::thread> helpers;
-    for (int part = 1; part < threads; ++part) helpers.emplace_back(work, part);
-    work(0);
-    for (std::thread& helper : helpers) helper.join();
-  };
+  auto in_parallel = [threads](const std::function<void(int)>& work) { ParallelFor(threads, threads, work); };
   Mesh mesh;
   mesh.faces = s.faces;
   for (int round = 0; round < s.options.rounds; ++round) {

@@ -3,11 +3,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <stdexcept>
-#include <thread>
 
 #include "calib/rig_check.h"
 #include "core/error.h"
 #include "core/mesh_ops.h"
+#include "core/parallel.h"
 #include "core/mesh_validation.h"
 #include "refine/normalised_diffusion.h"
 #include "silhouette/overlap.h"
@@ -150,10 +150,7 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
         s.RimSteps(mesh, normals, cameras[c], own, masks[c], &step_sums[part], &counts[part]);
       }
     };
-    std::vector<std::thread> helpers;
-    for (int part = 1; part < threads; ++part) helpers.emplace_back(work, part);
-    work(0);
-    for (std::thread& helper : helpers) helper.join();
+    ParallelFor(threads, threads, work);
     if (round == 0) summary.iou_before = iou;
     const double mean_iou = mean_over_usable(iou);
     if (mean_iou < mean_iou_before_move) {

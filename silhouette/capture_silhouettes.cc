@@ -3,41 +3,17 @@
 // against the other cameras' hulls.
 
 #include <algorithm>
-#include <atomic>
 #include <cstdlib>
-#include <exception>
 #include <functional>
 #include <memory>
 #include <mutex>
-#include <thread>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "silhouette/silhouette.h"
 
 namespace confluent {
 namespace {
-
-// Runs job(i) for i in [0, count) on up to `threads` threads; rethrows the first error.
-void ParallelFor(int count, int threads, const std::function<void(int)>& job) {
-  std::atomic<int> next{0};
-  std::atomic<bool> failed{false};
-  std::mutex mutex;
-  std::exception_ptr error;
-  auto worker = [&]() {
-    try {
-      for (int i = next++; i < count && !failed; i = next++) job(i);
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(mutex);
-      if (!error) error = std::current_exception();
-      failed = true;
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < std::min(threads, count); ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& thread : pool) thread.join();
-  if (error) std::rethrow_exception(error);
-}
 
 // Replaces the temporal-median extractors of the cameras without a plate by backgrounds learned
 // together (LearnBackgroundsWithoutPlates), when 3 or more cameras can give masks.

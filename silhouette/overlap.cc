@@ -58,13 +58,18 @@ Image RasterizeClosedMesh(const Mesh& mesh, const Camera& camera) {
     const int y0 = std::max(0, static_cast<int>(std::ceil(std::min({p0.y(), p1.y(), p2.y()}))));
     const int y1 = std::min(out.height - 1, static_cast<int>(std::floor(std::max({p0.y(), p1.y(), p2.y()}))));
     const double sign = area > 0.0 ? 1.0 : -1.0;
-    auto edge = [sign](const Eigen::Vector2d& from, const Eigen::Vector2d& to, double x, double y) {
-      return sign * ((to.x() - from.x()) * (y - from.y()) - (to.y() - from.y()) * (x - from.x()));
-    };
-    for (int y = y0; y <= y1; ++y)
+    // The edge function sign * ((to - from).x (y - from.y) - (to - from).y (x - from.x)) of each
+    // edge, its first product computed once per row (the same operations, the same result).
+    const double dx01 = p1.x() - p0.x(), dy01 = p1.y() - p0.y(), dx12 = p2.x() - p1.x(), dy12 = p2.y() - p1.y();
+    const double dx20 = p0.x() - p2.x(), dy20 = p0.y() - p2.y();
+    for (int y = y0; y <= y1; ++y) {
+      const double row01 = dx01 * (y - p0.y()), row12 = dx12 * (y - p1.y()), row20 = dx20 * (y - p2.y());
+      std::uint8_t* row = out.data.data() + static_cast<std::size_t>(y) * out.width;
       for (int x = x0; x <= x1; ++x)
-        if (edge(p0, p1, x, y) >= 0.0 && edge(p1, p2, x, y) >= 0.0 && edge(p2, p0, x, y) >= 0.0)
-          out.data[static_cast<std::size_t>(y) * out.width + x] = 255;
+        if (sign * (row01 - dy01 * (x - p0.x())) >= 0.0 && sign * (row12 - dy12 * (x - p1.x())) >= 0.0 &&
+            sign * (row20 - dy20 * (x - p2.x())) >= 0.0)
+          row[x] = 255;
+    }
   }
   return out;
 }
