@@ -1,0 +1,124 @@
+// The whole `confluent run` per frame, silhouettes through render, with the stage split: the
+// demo's capture (the default studio preset: 8 used and 2 held-out cameras at 1024x768, the
+// 50K-vertex scan), synthesised once for the first $CONFLUENT_BENCH_RUN_FRAMES frames (default
+// 16) into a temporary folder; synthesis is not timed. $CONFLUENT_BENCH_RUN_CAPTURE names an
+// existing capture to run instead (e.g. a demo's DIR/capture, all of its frames).
+//
+// One iteration is one run into a fresh run folder. Counters, in seconds: `whole_per_frame`, the
+// median over frames of the per-frame stages summed (silhouettes, tracking, deform, refine,
+// photo_refine, render); each stage's median per frame; `once`, the work done once per run
+// (correspondences, the factorisations, the video).
+
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "core/statistics.h"
+#include "pipeline/run_capture.h"
+#include "studio/presets.h"
+#include "studio/synth.h"
+
+namespace confluent {
+namespace {
+namespace fs = std::filesystem;
+
+const char* const kPerFrameStages[] = {"silhouettes", "tracking", "deform", "refine", "photo_refine", "render"};
+
+// A temporary folder, removed with everything in it when the program ends.
+struct ScratchFolder {
+  fs::path path = fs::temp_directory_path() / ("confluent_bench_run_" + std::to_string(::getpid()));
+  ~ScratchFolder() {
+    std::error_code ignored;
+    fs::remove_all(path, ignored);
+  }
+};
+
+// The capture to run (given, or synthesised once per process) and the run folder.
+struct Workspace {
+  std::string capture;
+  fs::path run;
+};
+
+const Workspace& GetWorkspace() {
+  static const ScratchFolder scratch;
+  static const Workspace workspace = [] {
+    Workspace w;
+    w.run = scratch.path / "run";
+    if (const char* given = std::getenv("CONFLUENT_BENCH_RUN_CAPTURE")) {
+      w.capture = given;
+      return w;
+    }
+    const char* frames = std::getenv("CONFLUENT_BENCH_RUN_FRAMES");
+    StudioSynthOptions options = StudioSynthPreset("default", "default");
+    options.motion.num_frames = frames ? std::atoi(frames) : 16;
+    options.capture_dir = (scratch.path / "capture").string();
+    options.ground_truth_dir = (scratch.path / "capture_gt").string();
+    SynthesizeCapture(options);
+    w.capture = options.capture_dir;
+    return w;
+  }();
+  return workspace;
+}
+
+// timings.csv rows: stage -> frame -> seconds (frame -1: once per run).
+std::map<std::string, std::map<int, double>> ReadTimings(const std::string& path) {
+  std::map<std::string, std::map<int, double>> rows;
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::stringstream fields(line);
+    std::string stage, frame, seconds;
+    std::getline(fields, stage, ',');
+    std::getline(fields, frame, ',');
+    std::getline(fields, seconds, ',');
+    rows[stage][std::stoi(frame)] = std::stod(seconds);
+  }
+  return rows;
+}
+
+void BM_RunPerFrame(benchmark::State& state) {
+  const Workspace& workspace = GetWorkspace();
+  std::map<std::string, std::map<int, double>> timings;
+  for (auto _ : state) {
+    state.PauseTiming();
+    fs::remove_all(workspace.run);
+    state.ResumeTiming();
+    RunOptions options;
+    options.capture = workspace.capture;
+    options.out = workspace.run.string();
+    options.held_out = {"holdout0", "holdout1"};
+    timings = ReadTimings(RunCapture(options, nullptr, nullptr, nullptr));
+  }
+  std::map<int, double> whole;
+  for (const char* stage : kPerFrameStages) {
+    std::vector<double> per_frame;
+    for (const auto& [frame, seconds] : timings[stage]) {
+      per_frame.push_back(seconds);
+      whole[frame] += seconds;
+    }
+    state.counters[stage] = per_frame.empty() ? 0.0 : Median(per_frame);
+  }
+  std::vector<double> whole_per_frame;
+  for (const auto& [frame, seconds] : whole) whole_per_frame.push_back(seconds);
+  state.counters["whole_per_frame"] = whole_per_frame.empty() ? 0.0 : Median(whole_per_frame);
+  state.counters["frames"] = static_cast<double>(whole.size());
+  double once = 0.0;
+  for (const auto& [stage, frames] : timings)
+    if (frames.count(-1)) once += frames.at(-1);
+  state.counters["once"] = once;
+}
+
+BENCHMARK(BM_RunPerFrame)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+}  // namespace
+}  // namespace confluent
+
+BENCHMARK_MAIN();
