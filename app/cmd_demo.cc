@@ -90,9 +90,11 @@ int RunDemo(const ParsedArgs& args, const Context& context) {
   std::printf("\ntime per stage (s): synth %.0f (when made), silhouettes %.1f, tracking %.1f, correspondences %.1f, "
               "deform %.1f, silhouette refinement %.1f, photo refinement %.1f, render %.1f\n", synth_seconds, timings.StageSeconds("silhouettes"),
               timings.StageSeconds("tracking"), timings.StageSeconds("correspondences"),
-              timings.StageSeconds("deform_factor") + timings.StageSeconds("deform"),
-              timings.StageSeconds("refine_factor") + timings.StageSeconds("refine"), timings.StageSeconds("photo_refine"),
-              timings.StageSeconds("render") + timings.StageSeconds("video"));
+              timings.StageSeconds("deform_factor") + timings.StageSeconds("deform") + timings.StageSeconds("deform_write"),
+              timings.StageSeconds("refine_factor") + timings.StageSeconds("refine_read") + timings.StageSeconds("refine"),
+              timings.StageSeconds("photo_refine_read") + timings.StageSeconds("photo_refine"),
+              timings.StageSeconds("render_read") + timings.StageSeconds("render") + timings.StageSeconds("render_write") +
+                  timings.StageSeconds("video"));
   std::printf("3D video: %s\nreport:   %s\n", (run_dir / "renders" / "orbit.mp4").c_str(), (run_dir / "report.html").c_str());
   return 0;
 }

@@ -5,9 +5,10 @@
 // existing capture to run instead (e.g. a demo's DIR/capture, all of its frames).
 //
 // One iteration is one run into a fresh run folder. Counters, in seconds: `whole_per_frame`, the
-// median over frames of the per-frame stages summed (silhouettes, tracking, deform, refine,
-// photo_refine, render); each stage's median per frame; `once`, the work done once per run
-// (correspondences, the factorisations, the video).
+// median over frames of everything timed per frame summed (silhouettes through render, with
+// reading and writing), and `whole_mean_per_frame` its mean (keyframes of the refinement, the
+// first frames of silhouettes and tracking cost more); each row of timings.csv's median per frame (e.g. render_read, render,
+// render_write); `once`, the work done once per run (correspondences, the factorisations, the video).
 
 #include <benchmark/benchmark.h>
 
@@ -28,8 +29,6 @@
 namespace confluent {
 namespace {
 namespace fs = std::filesystem;
-
-const char* const kPerFrameStages[] = {"silhouettes", "tracking", "deform", "refine", "photo_refine", "render"};
 
 // A temporary folder, removed with everything in it when the program ends.
 struct ScratchFolder {
@@ -98,17 +97,21 @@ void BM_RunPerFrame(benchmark::State& state) {
     timings = ReadTimings(RunCapture(options, nullptr, nullptr, nullptr));
   }
   std::map<int, double> whole;
-  for (const char* stage : kPerFrameStages) {
+  for (const auto& [stage, frames] : timings) {
     std::vector<double> per_frame;
-    for (const auto& [frame, seconds] : timings[stage]) {
-      per_frame.push_back(seconds);
-      whole[frame] += seconds;
-    }
-    state.counters[stage] = per_frame.empty() ? 0.0 : Median(per_frame);
+    for (const auto& [frame, seconds] : frames)
+      if (frame >= 0) {
+        per_frame.push_back(seconds);
+        whole[frame] += seconds;
+      }
+    if (!per_frame.empty()) state.counters[stage] = Median(per_frame);
   }
   std::vector<double> whole_per_frame;
   for (const auto& [frame, seconds] : whole) whole_per_frame.push_back(seconds);
   state.counters["whole_per_frame"] = whole_per_frame.empty() ? 0.0 : Median(whole_per_frame);
+  double sum = 0.0;
+  for (double seconds : whole_per_frame) sum += seconds;
+  state.counters["whole_mean_per_frame"] = whole_per_frame.empty() ? 0.0 : sum / whole_per_frame.size();
   state.counters["frames"] = static_cast<double>(whole.size());
   double once = 0.0;
   for (const auto& [stage, frames] : timings)

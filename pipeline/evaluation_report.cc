@@ -192,8 +192,9 @@ std::string ReportHtml(const RunFolder& run, const EvaluationSummary& summary, c
   if (fs::exists(run.Path("timings.csv"))) {
     TimingLog timings(run.Path("timings.csv"));
     html << "<h2>Time per stage</h2>\n<table><tr><th>stage</th><th>seconds</th></tr>\n";
-    for (const char* stage : {"silhouettes", "tracking", "correspondences", "deform_factor", "deform", "refine_factor", "refine",
-                              "photo_refine", "render", "video"})
+    for (const char* stage : {"silhouettes", "tracking", "correspondences", "deform_factor", "deform", "deform_write", "refine_factor",
+                              "refine_read", "refine", "photo_refine_read", "photo_refine", "render_read", "render",
+                              "render_write", "video"})
       html << "<tr><td style=\"text-align:left\">" << stage << "</td><td>" << Fixed(timings.StageSeconds(stage), 1) << "</td></tr>\n";
     html << "</table>\n";
   }

@@ -26,8 +26,9 @@ struct RunFolder {
 int RemoveStaleTemporaries(const std::string& root);
 
 // timings.csv: one row per stage and frame (frame -1: work of the stage that is not per frame,
-// e.g. a factorisation). Rows of earlier (resumed) invocations are kept; a frame computed again
-// replaces its row.
+// e.g. a factorisation). Reading a stage's inputs and writing its outputs have their own rows
+// where they are apart from the computation (e.g. render_read, render, render_write). Rows of
+// earlier (resumed) invocations are kept; a frame computed again replaces its row.
 class TimingLog {
  public:
   // Loads `path` when it exists (a resumed run).

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "pipeline/run_stages.h"
+#include "pipeline/frame_refinement.h"
 #include "pipeline/scan_correspondence.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -15,8 +16,6 @@
 #include "core/video_writer.h"
 #include "deform/confluent_motion.h"
 #include "deform/correspondences.h"
-#include "refine/photo_refinement.h"
-#include "refine/silhouette_refinement.h"
 #include "render/camera_path.h"
 #include "render/projective_texture.h"
 #include "tracking/motion_io.h"
@@ -82,34 +81,24 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   ConfluentMotion motion(scan, reference, correspondences, {}, inputs.scan_path, correspondences_path);
   timings->Add("deform_factor", -1, NowSeconds() - factor_start);
   fs::create_directories(folder.Path("scan"));
-  // Silhouette refinement against the cameras the run uses.
-  std::unique_ptr<SilhouetteRefiner> refiner;
-  // Photo-consistency refinement, then a few silhouette rounds to put the outline back where the
-  // moves along the normals shifted it.
-  std::unique_ptr<PhotoRefiner> photo_refiner;
-  const int outline_rounds = std::min(6, inputs.refine_iterations);
-  std::vector<Camera> used_cameras;
-  std::vector<int> used_indices;
+  // Silhouette refinement against the cameras the run uses, then photo consistency.
+  std::unique_ptr<FrameRefinement> refinement;
+  const std::vector<int> used_indices = inputs.cameras.used();
   if (inputs.refine_silhouettes) {
     const double refine_start = NowSeconds();
-    SilhouetteRefinementOptions refine_options;
-    refine_options.threads = inputs.threads;
-    refine_options.iterations = inputs.refine_iterations;
-    refiner = std::make_unique<SilhouetteRefiner>(scan, refine_options);
-    if (inputs.refine_photo) {
-      PhotoRefinementOptions photo_options;
-      photo_options.threads = inputs.threads;
-      photo_refiner = std::make_unique<PhotoRefiner>(scan, photo_options);
-    }
+    FrameRefinementOptions options;
+    options.photo = inputs.refine_photo;
+    options.silhouette_rounds = inputs.refine_iterations;
+    options.outline_rounds = std::min(options.outline_rounds, inputs.refine_iterations);
+    options.carried_silhouette_rounds = std::min(options.carried_silhouette_rounds, inputs.refine_iterations);
+    options.threads = inputs.threads;
+    refinement = std::make_unique<FrameRefinement>(scan, inputs.cameras.UsedCameras(inputs.capture->rig()), options);
     timings->Add("refine_factor", -1, NowSeconds() - refine_start);
-    const Rig& rig = inputs.capture->rig();
-    used_cameras = inputs.cameras.UsedCameras(rig);
-    used_indices = inputs.cameras.used();
   }
   double iou_before = 0.0, iou_after = 0.0;
   int iou_views = 0;
   double flow_before = 0.0, flow_after = 0.0;
-  int flow_frames = 0;
+  int flow_frames = 0, carried_frames = 0;
 
   auto template_vertices = [&](int frame) {
     const std::string path = folder.TemplatePath(frame);
@@ -120,58 +109,77 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
                                  std::to_string(reference.vertices.rows()));
     return posed.vertices;
   };
+  // The used cameras' masks and images at `frame`.
+  auto read_masks = [&](int frame) {
+    std::vector<Image> masks(used_indices.size());
+    ParallelFor(static_cast<int>(used_indices.size()), inputs.threads, [&](int i) {
+      const std::string path = RunMaskPath(inputs, used_indices[i], frame);
+      if (!fs::exists(path)) throw InputError(path, "silhouette missing (the silhouette stage did not finish this frame)");
+      masks[i] = ReadMaskFile(path);
+    });
+    return masks;
+  };
+  auto read_images = [&](int frame) {
+    return inputs.refine_photo ? inputs.capture->ReadFrames(used_indices, frame, inputs.threads) : std::vector<Image>();
+  };
   int done = 0;
   int previous = -2;
   std::vector<int> singular_frames;
   for (int frame : todo) {
-    // Sign consistency and the intermediate reference follow the previous frame: replay it when
-    // this invocation starts in the middle of the sequence.
-    if (previous != frame - 1 && frame > 0 && fs::exists(folder.TemplatePath(frame - 1))) motion.Deform(template_vertices(frame - 1));
+    if (previous != frame - 1) {
+      // Sign consistency and the intermediate reference follow the previous frame, the refinement
+      // the frames since the keyframe: replay them when this invocation starts in the middle.
+      // Without their tracked templates (shards run side by side) the frame's refinement starts
+      // from its deformation.
+      int first = frame;  // the first frame replayed with its refinement
+      if (refinement)
+        while (first > 0 && !refinement->IsKeyframe(first)) --first;
+      bool tracked = true;
+      for (int earlier = std::max(0, first - 1); earlier < frame; ++earlier)
+        tracked = tracked && fs::exists(folder.TemplatePath(earlier));
+      if (!tracked) first = frame;
+      if (first > 0 && fs::exists(folder.TemplatePath(first - 1))) motion.Deform(template_vertices(first - 1));
+      for (int earlier = first; earlier < frame; ++earlier)
+        refinement->Refine(earlier, motion.Deform(template_vertices(earlier)), read_masks(earlier), read_images(earlier));
+    }
     const double frame_start = NowSeconds();
     DeformSummary summary;
     Mesh animated = scan;
     animated.vertices = motion.Deform(template_vertices(frame), &summary);
     timings->Add("deform", frame, NowSeconds() - frame_start);
-    std::vector<Image> masks;
-    std::vector<double> iou_after_frame;  // per used camera, after the last refinement
-    if (refiner) {
-      const double refine_start = NowSeconds();
-      masks.resize(used_indices.size());
-      ParallelFor(static_cast<int>(used_indices.size()), inputs.threads, [&](int i) {
-        const std::string path = RunMaskPath(inputs, used_indices[i], frame);
-        if (!fs::exists(path)) throw InputError(path, "silhouette missing (the silhouette stage did not finish this frame)");
-        masks[i] = ReadMaskFile(path);
-      });
-      SilhouetteRefinementSummary refined;
-      animated.vertices = refiner->Refine(animated.vertices, used_cameras, masks, &refined);
-      for (std::size_t i = 0; i < used_cameras.size(); ++i)
-        if (!std::isnan(refined.iou_before[i])) iou_before += refined.iou_before[i], ++iou_views;
-      iou_after_frame = refined.iou_after;
-      timings->Add("refine", frame, NowSeconds() - refine_start);
+    if (refinement) {
+      const double read_start = NowSeconds();
+      const std::vector<Image> masks = read_masks(frame);
+      const double masks_read = NowSeconds() - read_start;
+      const std::vector<Image> images = read_images(frame);
+      const double images_read = NowSeconds() - read_start - masks_read;
+      FrameRefinementSummary refined;
+      animated.vertices = refinement->Refine(frame, animated.vertices, masks, images, &refined);
+      // How far the refinement brought the frames that start from their deformation.
+      for (std::size_t i = 0; i < refined.iou_start.size() && !refined.carried; ++i)
+        if (!std::isnan(refined.iou_start[i])) iou_before += refined.iou_start[i], iou_after += refined.iou_after[i], ++iou_views;
+      if (refined.photo.rounds > 0 && !refined.carried)
+        flow_before += refined.photo.first_flow_px, flow_after += refined.photo.last_flow_px, ++flow_frames;
+      if (refined.carried) ++carried_frames;
+      timings->Add("refine_read", frame, masks_read);
+      timings->Add("refine", frame, refined.silhouette_seconds);
+      if (inputs.refine_photo) {
+        timings->Add("photo_refine_read", frame, images_read);
+        timings->Add("photo_refine", frame, refined.photo_seconds);
+      }
     }
-    if (photo_refiner) {
-      const double photo_start = NowSeconds();
-      const std::vector<Image> images = inputs.capture->ReadFrames(used_indices, frame, inputs.threads);
-      PhotoRefinementSummary photo;
-      animated.vertices = photo_refiner->Refine(animated.vertices, used_cameras, images, &photo);
-      if (photo.rounds > 0) flow_before += photo.first_flow_px, flow_after += photo.last_flow_px, ++flow_frames;
-      SilhouetteRefinementSummary outline;
-      animated.vertices = refiner->Refine(animated.vertices, used_cameras, masks, &outline, outline_rounds);
-      iou_after_frame = outline.iou_after;
-      timings->Add("photo_refine", frame, NowSeconds() - photo_start);
-    }
-    for (double iou : iou_after_frame)
-      if (!std::isnan(iou)) iou_after += iou;
+    const double write_start = NowSeconds();
     WriteMesh(folder.ScanPath(frame), animated);
+    timings->Add("deform_write", frame, NowSeconds() - write_start);
     if (summary.singular) singular_frames.push_back(frame);
     previous = frame;
     ++report.computed;
     ReportProgress(progress, "deform", ++done, todo.size(), "frame " + std::to_string(frame));
   }
   if (iou_views > 0) {
-    char line[160];
-    std::snprintf(line, sizeof(line), "%s: scan IoU in the used cameras %.4f -> %.4f (mean over %d views)",
-                  photo_refiner ? "silhouette and photo refinement" : "silhouette refinement", iou_before / iou_views,
+    char line[200];
+    std::snprintf(line, sizeof(line), "%s: scan IoU in the used cameras %.4f -> %.4f (mean over the %d views of the keyframes)",
+                  inputs.refine_photo ? "silhouette and photo refinement" : "silhouette refinement", iou_before / iou_views,
                   iou_after / iou_views, iou_views);
     report.notes.push_back(line);
   }
@@ -179,9 +187,11 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     char line[200];
     std::snprintf(line, sizeof(line),
                   "photo refinement: mean flow between neighbouring cameras through the scan %.3f px -> %.3f px (before "
-                  "the last round; mean over %d frames)", flow_before / flow_frames, flow_after / flow_frames, flow_frames);
+                  "the last round; mean over %d keyframes)", flow_before / flow_frames, flow_after / flow_frames, flow_frames);
     report.notes.push_back(line);
   }
+  if (carried_frames > 0)
+    report.notes.push_back(std::to_string(carried_frames) + " frame(s) between keyframes refined from the previous frame's correction");
   if (!singular_frames.empty())
     report.notes.push_back(std::to_string(singular_frames.size()) +
                            " frame(s) near a 180-degree rotation used an intermediate reference (report section 4.3), frames " +
@@ -246,10 +256,14 @@ StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& op
         const std::string mask_path = RunMaskPath(inputs, used[i], frame);
         if (fs::exists(mask_path)) masks[i] = ReadMaskFile(mask_path);
       });
+      const double render_start = NowSeconds();
       texturer.SetFrame(mesh.vertices, used_cameras, images, masks);
       const RenderResult result = texturer.Render(path[frame]);
+      const double write_start = NowSeconds();
       WriteImage(folder.RenderPath(options.view, frame), result.color);
-      timings->Add("render", frame, NowSeconds() - frame_start);
+      timings->Add("render_read", frame, render_start - frame_start);
+      timings->Add("render", frame, write_start - render_start);
+      timings->Add("render_write", frame, NowSeconds() - write_start);
       ++report.computed;
       ReportProgress(progress, "render", ++done, todo.size(), "frame " + std::to_string(frame));
     }

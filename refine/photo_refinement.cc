@@ -183,7 +183,8 @@ PhotoRefiner::PhotoRefiner(PhotoRefiner&&) noexcept = default;
 PhotoRefiner& PhotoRefiner::operator=(PhotoRefiner&&) noexcept = default;
 
 RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vector<Camera>& cameras,
-                                  const std::vector<Image>& images, PhotoRefinementSummary* summary_out) const {
+                                  const std::vector<Image>& images, PhotoRefinementSummary* summary_out,
+                                  int rounds) const {
   const Impl& s = *impl_;
   const int n = static_cast<int>(vertices.rows());
   if (n != s.spread->num_vertices()) throw std::invalid_argument("PhotoRefiner: the vertex count differs from the scan's");
@@ -235,7 +236,8 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
   auto in_parallel = [threads](const std::function<void(int)>& work) { ParallelFor(threads, threads, work); };
   Mesh mesh;
   mesh.faces = s.faces;
-  for (int round = 0; round < s.options.rounds; ++round) {
+  const int num_rounds = rounds >= 0 ? rounds : s.options.rounds;
+  for (int round = 0; round < num_rounds; ++round) {
     mesh.vertices = current;
     const RowMatrixX3f as_float = current.cast<float>();
     std::vector<CpuRasterFrame> frames(threads);

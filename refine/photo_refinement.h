@@ -68,9 +68,11 @@ class PhotoRefiner {
   // The scan's `vertices` (posed, metres) moved along their normals until neighbouring cameras
   // agree: images[i] is camera i's frame (8-bit RGB or grey, the camera's size, else
   // std::invalid_argument). Lens distortion is undone internally. Fewer than two cameras: the
-  // vertices are returned unchanged. Never returns non-finite values.
+  // vertices are returned unchanged. Never returns non-finite values. `rounds` >= 0 overrides the
+  // options' rounds for this call.
   RowMatrixX3d Refine(const RowMatrixX3d& vertices, const std::vector<Camera>& cameras,
-                      const std::vector<Image>& images, PhotoRefinementSummary* summary = nullptr) const;
+                      const std::vector<Image>& images, PhotoRefinementSummary* summary = nullptr,
+                      int rounds = -1) const;
 
  private:
   struct Impl;
