@@ -30,6 +30,9 @@ int RunRun(const ParsedArgs& args, const Context& context) {
   options.refine_iterations = args.get_int("refine-iterations", options.refine_iterations);
   if (options.refine_iterations < 1 || options.refine_iterations > 50)
     throw UsageError("--refine-iterations: must be within [1, 50]");
+  options.refine_keyframes = args.get_int("refine-keyframes", options.refine_keyframes);
+  if (options.refine_keyframes < 1 || options.refine_keyframes > 1000)
+    throw UsageError("--refine-keyframes: must be within [1, 1000]");
   options.refine_photo = !args.has("no-photo-refine");
   options.threads = args.get_int("threads", options.threads);
   if (options.threads < 1 || options.threads > 64) throw UsageError("--threads: must be within [1, 64]");
@@ -79,6 +82,7 @@ CommandSpec MakeRunCommand() {
       {"masks", "DIR", "use these masks DIR/<cam>/<frame>.png instead of extracting silhouettes"},
       {"no-refine", "", "keep the deformed scan as Confluent Motion gives it (no silhouette refinement)"},
       {"refine-iterations", "N", "rounds of silhouette refinement per frame (default 18)"},
+      {"refine-keyframes", "N", "refine only every N-th frame from its deformation, the others from the previous frame's correction in fewer rounds (default 1)"},
       {"no-photo-refine", "", "skip the photo-consistency refinement that follows the silhouette refinement"},
       {"no-render", "", "skip the 3D-video render stage"},
       {"render-width", "PX", "width of the orbit video (default 960)"},

@@ -26,7 +26,7 @@ struct FrameRefinementOptions {
   int silhouette_rounds = 18;    // at a keyframe
   int photo_rounds = 5;          // at a keyframe
   int outline_rounds = 6;        // silhouette rounds after the photo refinement
-  int keyframe_interval = 10;    // 1: every frame starts from its deformation
+  int keyframe_interval = 1;     // 1: every frame starts from its deformation
   int carried_silhouette_rounds = 6;  // the rounds of a frame that starts from the carried correction
   int carried_photo_rounds = 2;
   int threads = 2;

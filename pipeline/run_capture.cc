@@ -13,6 +13,8 @@ void RunOptions::Check() const {
   if (out.empty()) throw UsageError("RunOptions.out: empty (name the run folder)");
   RequireOption(refine_iterations >= 1 && refine_iterations <= 50, "RunOptions.refine_iterations", refine_iterations,
                 "within [1, 50]");
+  RequireOption(refine_keyframes >= 1 && refine_keyframes <= 1000, "RunOptions.refine_keyframes", refine_keyframes,
+                "within [1, 1000]");
   RequireOption(threads >= 1 && threads <= 64, "RunOptions.threads", threads, "within [1, 64]");
   RequireOption(fps >= 0.0 && fps <= 1000.0, "RunOptions.fps", fps, "within [0, 1000] (0: automatic)");
   RequireOption(render_options.width >= 16 && render_options.width <= 8192, "RunOptions.render_options.width",
@@ -58,6 +60,7 @@ std::string RunCapture(const RunOptions& options, const std::function<ProgressCa
     throw InputError(inputs.correspondences_path, "correspondences file not found");
   inputs.refine_silhouettes = options.refine_silhouettes;
   inputs.refine_iterations = options.refine_iterations;
+  inputs.refine_keyframes = options.refine_keyframes;
   inputs.refine_photo = options.refine_silhouettes && options.refine_photo;
   inputs.threads = options.threads;
 

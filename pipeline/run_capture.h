@@ -25,6 +25,7 @@ struct RunOptions {
   std::string correspondences;         // "": the capture's correspondences.json, else automatic
   bool refine_silhouettes = true;
   int refine_iterations = 18;
+  int refine_keyframes = 1;            // RunInputs::refine_keyframes
   bool refine_photo = true;
   bool render = true;                  // the orbit 3D video
   RenderStageOptions render_options;

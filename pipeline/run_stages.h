@@ -32,6 +32,9 @@ struct RunInputs {
   int threads = 2;
   bool refine_silhouettes = true;    // pull the animated scan onto the used cameras' masks
   int refine_iterations = 18;        // rounds of the silhouette refinement per frame
+  // Every this many frames the refinement starts from the deformation; the frames between start
+  // from the previous frame's correction, in fewer rounds (pipeline/frame_refinement.h).
+  int refine_keyframes = 1;
   bool refine_photo = true;          // then make neighbouring used cameras agree on the texture
   TrackerOptions tracker;            // of the tracking stage
 };

@@ -92,6 +92,7 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     options.outline_rounds = std::min(options.outline_rounds, inputs.refine_iterations);
     options.carried_silhouette_rounds = std::min(options.carried_silhouette_rounds, inputs.refine_iterations);
     options.threads = inputs.threads;
+    options.keyframe_interval = inputs.refine_keyframes;
     refinement = std::make_unique<FrameRefinement>(scan, inputs.cameras.UsedCameras(inputs.capture->rig()), options);
     timings->Add("refine_factor", -1, NowSeconds() - refine_start);
   }

@@ -36,9 +36,11 @@ class RunCommandTest : public ::testing::Test {
   }
   static std::string Capture() { return *dir_ / "capture"; }
   static std::string Truth() { return *dir_ / "capture_gt"; }
+  // Refinement keyframes at frames 0, 3, 6 and 9: a run resumed at frame 1, 4 or 8 replays the
+  // frames since the keyframe (pipeline/frame_refinement.h).
   static std::vector<std::string> RunArgs(const std::string& run) {
     return {"run", Capture(), "--out", run, "--exclude-camera", "holdout0", "--exclude-camera", "holdout1",
-            "--render-width", "160", "--render-height", "120"};
+            "--render-width", "160", "--render-height", "120", "--refine-keyframes", "3"};
   }
   // An uninterrupted run of RunArgs, made once for the suite (do not modify it).
   static const std::string& ReferenceRun() {
