@@ -1,7 +1,8 @@
 // The whole `confluent run` per frame, silhouettes through render, with the stage split: the
 // demo's capture (the default studio preset: 8 used and 2 held-out cameras at 1024x768, the
 // 50K-vertex scan), synthesised once for the first $CONFLUENT_BENCH_RUN_FRAMES frames (default
-// 16) into a temporary folder; synthesis is not timed. $CONFLUENT_BENCH_RUN_CAPTURE names an
+// 40: the tracker's lost-limb search makes frames 8-16 of this performance take 5-7 s each, so
+// fewer frames would time that alone) into a temporary folder; synthesis is not timed. $CONFLUENT_BENCH_RUN_CAPTURE names an
 // existing capture to run instead (e.g. a demo's DIR/capture, all of its frames).
 //
 // One iteration is one run into a fresh run folder. Counters, in seconds: `whole_per_frame`, the
@@ -56,7 +57,7 @@ const Workspace& GetWorkspace() {
     }
     const char* frames = std::getenv("CONFLUENT_BENCH_RUN_FRAMES");
     StudioSynthOptions options = StudioSynthPreset("default", "default");
-    options.motion.num_frames = frames ? std::atoi(frames) : 16;
+    options.motion.num_frames = frames ? std::atoi(frames) : 40;
     options.capture_dir = (scratch.path / "capture").string();
     options.ground_truth_dir = (scratch.path / "capture_gt").string();
     SynthesizeCapture(options);
