@@ -179,16 +179,17 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   }
   if (iou_views > 0) {
     char line[200];
-    std::snprintf(line, sizeof(line), "%s: scan IoU in the used cameras %.4f -> %.4f (mean over the %d views of the keyframes)",
+    std::snprintf(line, sizeof(line), "%s: scan IoU in the used cameras %.4f -> %.4f (mean over %d views%s)",
                   inputs.refine_photo ? "silhouette and photo refinement" : "silhouette refinement", iou_before / iou_views,
-                  iou_after / iou_views, iou_views);
+                  iou_after / iou_views, iou_views, carried_frames > 0 ? " of the keyframes" : "");
     report.notes.push_back(line);
   }
   if (flow_frames > 0) {
     char line[200];
     std::snprintf(line, sizeof(line),
                   "photo refinement: mean flow between neighbouring cameras through the scan %.3f px -> %.3f px (before "
-                  "the last round; mean over %d keyframes)", flow_before / flow_frames, flow_after / flow_frames, flow_frames);
+                  "the last round; mean over %d %s)", flow_before / flow_frames, flow_after / flow_frames, flow_frames,
+                  carried_frames > 0 ? "keyframes" : "frames");
     report.notes.push_back(line);
   }
   if (carried_frames > 0)
