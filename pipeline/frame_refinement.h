@@ -10,6 +10,8 @@
 // takes fewer rounds. Keyframes (frame % keyframe_interval == 0) start from the
 // deformation as it is, so any frame's result depends only on the frames since its keyframe: a
 // run resumed or sharded in the middle replays those frames and writes the same scan.
+// It pays where the tracking is steady (the demo: +0.3 dB held-out PSNR in half the time) and
+// costs where it jitters (samba: -0.5 dB), so `run` keeps every frame a keyframe unless asked.
 
 #include <vector>
 
