@@ -2,28 +2,29 @@
 // demo's capture (the default studio preset: 8 used and 2 held-out cameras at 1024x768, the
 // 50K-vertex scan), synthesised once for the first $CONFLUENT_BENCH_RUN_FRAMES frames (default
 // 40: the tracker's lost-limb search makes frames 8-16 of this performance take 5-7 s each, so
-// fewer frames would time that alone) into a temporary folder; synthesis is not timed. $CONFLUENT_BENCH_RUN_CAPTURE names an
-// existing capture to run instead (e.g. a demo's DIR/capture, all of its frames).
+// fewer frames would time that alone) into a temporary folder; synthesis is not timed.
+// $CONFLUENT_BENCH_RUN_CAPTURE names an existing capture to run instead (e.g. a demo's
+// DIR/capture, all of its frames).
 //
 // One iteration is one run into a fresh run folder. Counters, in seconds: `whole_per_frame`, the
 // median over frames of everything timed per frame summed (silhouettes through render, with
-// reading and writing), and `whole_mean_per_frame` its mean (keyframes of the refinement, the
-// first frames of silhouettes and tracking cost more); each row of timings.csv's median per frame (e.g. render_read, render,
-// render_write); `once`, the work done once per run (correspondences, the factorisations, the video).
+// reading and writing), and `whole_mean_per_frame` its mean (refinement keyframes and the first
+// frames of silhouettes and tracking cost more); each timings.csv row's median per frame (e.g.
+// render_read, render, render_write); `once`, the work done once per run (correspondences, the
+// factorisations, the video).
 
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 #include <unistd.h>
 #include <vector>
 
 #include "core/statistics.h"
 #include "pipeline/run_capture.h"
+#include "pipeline/run_folder.h"
 #include "studio/presets.h"
 #include "studio/synth.h"
 
@@ -67,26 +68,9 @@ const Workspace& GetWorkspace() {
   return workspace;
 }
 
-// timings.csv rows: stage -> frame -> seconds (frame -1: once per run).
-std::map<std::string, std::map<int, double>> ReadTimings(const std::string& path) {
-  std::map<std::string, std::map<int, double>> rows;
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);  // header
-  while (std::getline(in, line)) {
-    std::stringstream fields(line);
-    std::string stage, frame, seconds;
-    std::getline(fields, stage, ',');
-    std::getline(fields, frame, ',');
-    std::getline(fields, seconds, ',');
-    rows[stage][std::stoi(frame)] = std::stod(seconds);
-  }
-  return rows;
-}
-
 void BM_RunPerFrame(benchmark::State& state) {
   const Workspace& workspace = GetWorkspace();
-  std::map<std::string, std::map<int, double>> timings;
+  std::map<std::string, std::map<int, double>> timings;  // stage -> frame -> seconds (-1: once per run)
   for (auto _ : state) {
     state.PauseTiming();
     fs::remove_all(workspace.run);
@@ -95,7 +79,9 @@ void BM_RunPerFrame(benchmark::State& state) {
     options.capture = workspace.capture;
     options.out = workspace.run.string();
     options.held_out = {"holdout0", "holdout1"};
-    timings = ReadTimings(RunCapture(options, nullptr, nullptr, nullptr));
+    const TimingLog log(RunCapture(options, nullptr, nullptr, nullptr));
+    timings.clear();
+    for (const TimingLog::Row& row : log.rows()) timings[row.stage][row.frame] = row.seconds;
   }
   std::map<int, double> whole;
   for (const auto& [stage, frames] : timings) {

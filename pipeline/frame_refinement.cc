@@ -85,7 +85,9 @@ RowMatrixX3d FrameRefinement::Refine(int frame, const RowMatrixX3d& deformed, co
   Mesh deformed_mesh;
   deformed_mesh.vertices = deformed;
   deformed_mesh.faces = faces_;
-  const RowMatrixX3d frames = LocalFrames(deformed_mesh, neighbours_);
+  // The local frames, only where a correction is carried in or out.
+  const bool carried_on = !IsKeyframe(frame + 1);
+  const RowMatrixX3d frames = carry || carried_on ? LocalFrames(deformed_mesh, neighbours_) : RowMatrixX3d();
   RowMatrixX3d current = deformed;
   if (carry) {
     for (int v = 0; v < deformed.rows(); ++v)
@@ -110,13 +112,15 @@ RowMatrixX3d FrameRefinement::Refine(int frame, const RowMatrixX3d& deformed, co
     summary.iou_after = outline.iou_after;
     summary.photo_seconds = NowSeconds() - start;
   }
-  carried_.resize(deformed.rows(), 3);
-  for (int v = 0; v < deformed.rows(); ++v) {
-    const Eigen::RowVector3d correction = current.row(v) - deformed.row(v);
-    carried_.row(v) << correction.dot(frames.row(3 * v)), correction.dot(frames.row(3 * v + 1)),
-        correction.dot(frames.row(3 * v + 2));
+  if (carried_on) {
+    carried_.resize(deformed.rows(), 3);
+    for (int v = 0; v < deformed.rows(); ++v) {
+      const Eigen::RowVector3d correction = current.row(v) - deformed.row(v);
+      carried_.row(v) << correction.dot(frames.row(3 * v)), correction.dot(frames.row(3 * v + 1)),
+          correction.dot(frames.row(3 * v + 2));
+    }
   }
-  carried_frame_ = frame;
+  carried_frame_ = carried_on ? frame : -2;
   if (summary_out) *summary_out = std::move(summary);
   return current;
 }

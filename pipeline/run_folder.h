@@ -39,12 +39,14 @@ class TimingLog {
   // Sum of the seconds of one stage over all rows.
   double StageSeconds(const std::string& stage) const;
 
- private:
   struct Row {
     std::string stage;
     int frame;
     double seconds;
   };
+  const std::vector<Row>& rows() const { return rows_; }
+
+ private:
   std::string path_;
   std::vector<Row> rows_;
 };
