@@ -348,6 +348,17 @@ TEST_F(RunCommandTest, OutOfRangeRefineIterationsIsAUsageError) {
   EXPECT_FALSE(fs::exists(out / "run/masks")) << "no work before the options are checked";
 }
 
+TEST_F(RunCommandTest, OutOfRangeRefineKeyframesIsAUsageError) {
+  testing::TempDir out;
+  for (const char* value : {"0", "1001", "ten"}) {
+    const testing::CommandResult result =
+        RunConfluent({"run", Capture(), "--out", out / "run", "--refine-keyframes", value});
+    EXPECT_EQ(result.exit_code, 2) << value;
+    EXPECT_NE(result.stderr_text.find("--refine-keyframes"), std::string::npos) << value << ": " << result.stderr_text;
+    EXPECT_FALSE(fs::exists(out / "run/masks")) << "no work before the options are checked";
+  }
+}
+
 TEST_F(RunCommandTest, CorruptImageMidwayStopsWithItsNameAndKeepsEarlierFrames) {
   testing::TempDir out;
   const std::string capture = out / "capture";
