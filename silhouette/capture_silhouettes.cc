@@ -133,6 +133,19 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
       for (int c = 0; c < num_cameras; ++c)
         if (excluded(c)) views[c] = ViewConsistency{1, 1, 1, 0, 0};
     }
+    if (options.plate_claim_inside_hull && !views.empty())
+      ParallelFor(num_cameras, options.threads, [&](int c) {
+        if (excluded(c) || extractors[c]->info().method != SilhouetteMethod::kPlate || hulls[c].empty()) return;
+        Image labels;
+        extractors[c]->model().Classify(ToRgb8(images[c]), &labels);
+        const int added = ClaimHighlightsInsideHull(&masks[c], labels, hulls[c], multiview);
+        if (added == 0) return;
+        const Image cleaned = CleanMask(masks[c], options.cleanup);
+        std::size_t changed = 0;
+        for (std::size_t i = 0; i < cleaned.data.size(); ++i) changed += cleaned.data[i] != masks[c].data[i];
+        views[c].added += added + static_cast<int>(changed);  // counted as corrected pixels
+        masks[c] = cleaned;
+      });
     if (options.grabcut_learned && !views.empty())
       ParallelFor(num_cameras, options.threads, [&](int c) {
         if (!correct[c] || extractors[c]->info().method != SilhouetteMethod::kLearned) return;

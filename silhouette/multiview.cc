@@ -173,6 +173,33 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   return result;
 }
 
+int ClaimHighlightsInsideHull(Image* mask, const Image& labels, const Image& hull, const MultiViewOptions& options) {
+  if (labels.width != mask->width || labels.height != mask->height || hull.width != mask->width ||
+      hull.height != mask->height)
+    throw UsageError("ClaimHighlightsInsideHull: mask, labels and hull must have one size");
+  const int deep = ScaledRadius(options.hole_margin, mask->width);
+  cv::Mat inside = AsCvMat(hull).clone();
+  if (deep > 0) {
+    // Closed first: the projected voxels leave pinholes that erosion would widen.
+    cv::morphologyEx(inside, inside, cv::MORPH_CLOSE, Disk(deep), cv::Point(-1, -1), 1, cv::BORDER_CONSTANT,
+                     cv::Scalar(0));
+    cv::erode(inside, inside, Disk(deep));
+  }
+  const std::uint8_t highlight = static_cast<std::uint8_t>(PixelClass::kHighlight);
+  int added = 0;
+  for (int y = 0; y < mask->height; ++y) {
+    const std::uint8_t* within = inside.ptr<std::uint8_t>(y);
+    const std::uint8_t* label = &labels.at<std::uint8_t>(0, y);
+    std::uint8_t* out = &mask->at<std::uint8_t>(0, y);
+    for (int x = 0; x < mask->width; ++x)
+      if (within[x] != 0 && out[x] == 0 && label[x] == highlight) {
+        out[x] = 255;
+        ++added;
+      }
+  }
+  return added;
+}
+
 MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<CameraFrameConfidence>& confidences,
                              double min_confidence) {
   const int n = rig.size();

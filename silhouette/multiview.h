@@ -11,6 +11,7 @@
 
 #include "calib/camera.h"
 #include "core/image.h"
+#include "silhouette/background_model.h"
 
 namespace confluent {
 
@@ -53,6 +54,14 @@ struct ViewConsistency {
 std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* masks, const std::vector<bool>& correct,
                                             const MultiViewOptions& options, std::vector<Image>* hulls = nullptr,
                                             std::vector<Image>* strict_hulls = nullptr);
+
+// Claims for `mask` (1-channel 0/255, from a clean plate) the pixels that the plate's classifier
+// called a highlight of the background (`labels`: a PixelClass per pixel, from
+// BackgroundModel::Classify) where `hull` (the other cameras' projected hull, eroded by
+// options.hole_margin) says the actor is: skin over a beige floor is a "highlight" of the floor.
+// Shadows are left alone: the actor's own shadow lies on the floor beside the feet, which a
+// coarse hull covers. Returns the number of pixels added.
+int ClaimHighlightsInsideHull(Image* mask, const Image& labels, const Image& hull, const MultiViewOptions& options);
 
 // How far a set of masks can be trusted, from a sample of frames.
 // One checked camera-frame.

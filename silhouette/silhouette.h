@@ -57,6 +57,9 @@ struct SilhouetteOptions {
   bool multiview_check = true;
   bool multiview_correct_learned = true;
   bool multiview_correct_plates = false;
+  // Where the other cameras' hull says the actor is, a plate camera's "highlights" of the
+  // background are the actor (ClaimHighlightsInsideHull).
+  bool plate_claim_inside_hull = true;
   // Cameras kept out of both (empty, or one flag per camera): held-out cameras, whose images
   // must not shape the masks of the cameras that are evaluated against them. They keep their
   // own background (temporal median without a plate) and are not checked (confidence 1).

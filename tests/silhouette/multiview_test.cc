@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "core/error.h"
 #include "silhouette/multiview.h"
 #include "silhouette/plate_free.h"
 #include "tests/silhouette/multiview_scene.h"
@@ -100,6 +101,42 @@ TEST(MultiView, CorrectionRemovesAGhostAndFillsAHoleWhereTheOthersAgree) {
   EXPECT_EQ(masks[3].at<std::uint8_t>(15, 80), 0);
   EXPECT_EQ(masks[3].at<std::uint8_t>(tx, ty), 255);
   for (int c : {0, 1, 2, 4, 5, 6, 7}) EXPECT_EQ(Iou(masks[c], truth[c]), 1.0);  // not asked to correct
+}
+
+// A clean plate's mask misses actor pixels that look like a brighter background (skin over a
+// beige floor): where the other cameras' hull holds the actor, such highlights are claimed;
+// shadows (the actor's own, on the floor) and highlights away from the actor are not.
+TEST(MultiView, HighlightsInsideTheOthersHullAreClaimedButNotShadowsOrHighlightsElsewhere) {
+  const Rig rig = testing::MakeRingRig(8, 320, 240);
+  const auto actor = testing::MakeActor(0.0, 0.0, 0.3);
+  std::vector<Image> masks;
+  for (const Camera& camera : rig.cameras) masks.push_back(testing::RenderMask(camera, actor));
+  const Image truth = masks[3];
+  const Eigen::Vector2d torso = rig.cameras[3].Project(Eigen::Vector3d(0, 0, 1.2));
+  const int tx = static_cast<int>(torso.x()), ty = static_cast<int>(torso.y());
+  // cam3's plate mask lost two patches of the torso: one the classifier saw as a highlight of
+  // the background, one as a shadow. A highlight far from the actor is not the actor either.
+  Fill(&masks[3], tx - 8, ty - 10, tx, ty, 0);
+  Fill(&masks[3], tx, ty, tx + 8, ty + 10, 0);
+  Image labels(320, 240, 1);
+  Fill(&labels, tx - 8, ty - 10, tx, ty, static_cast<std::uint8_t>(PixelClass::kHighlight));
+  Fill(&labels, tx, ty, tx + 8, ty + 10, static_cast<std::uint8_t>(PixelClass::kShadow));
+  Fill(&labels, 5, 5, 25, 25, static_cast<std::uint8_t>(PixelClass::kHighlight));
+  std::vector<Image> hulls;
+  CheckMultiView(rig, &masks, {}, MultiViewOptions{}, &hulls);
+  ASSERT_FALSE(hulls[3].empty());
+  Image claimed = masks[3];
+  const int added = ClaimHighlightsInsideHull(&claimed, labels, hulls[3], MultiViewOptions{});
+  EXPECT_EQ(added, 80);  // the whole highlight patch, nothing else
+  for (int y = 0; y < 240; ++y)
+    for (int x = 0; x < 320; ++x) {
+      const bool highlight_patch = x >= tx - 8 && x < tx && y >= ty - 10 && y < ty;
+      ASSERT_EQ(claimed.at<std::uint8_t>(x, y), highlight_patch ? 255 : masks[3].at<std::uint8_t>(x, y))
+          << x << "," << y;
+    }
+  EXPECT_GT(Iou(claimed, truth), Iou(masks[3], truth));
+  Image wrong_size(160, 120, 1);
+  EXPECT_THROW(ClaimHighlightsInsideHull(&claimed, wrong_size, hulls[3], MultiViewOptions{}), UsageError);
 }
 
 TEST(MultiView, TrustAssessmentWarnsAboutAShiftedCameraOnly) {
