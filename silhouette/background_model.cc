@@ -249,41 +249,58 @@ void BackgroundModel::Pack() {
 
 Image BackgroundModel::Classify(const Image& frame) const { return Classify(frame, nullptr); }
 
-Image BackgroundModel::Classify(const Image& frame, Image* labels) const {
-  if (frame.width != width_ || frame.height != height_ || frame.channels != 3 || frame.type != PixelType::kUInt8)
-    std::abort();  // internal invariant: callers check sizes and convert to 8-bit RGB
-  Image mask(width_, height_, 1);
+ClassifyParams BackgroundModel::Params() const {
   ClassifyParams params;
   const float tau_c = static_cast<float>(options_.chroma_threshold);
   params.chroma_threshold_sq = tau_c * tau_c;
   params.chroma_relative_sq = static_cast<float>(options_.chroma_relative * options_.chroma_relative);
   params.spread_step = kSpreadStep;
   params.high_step = kHighStep;
+  return params;
+}
+
+// Background, shadow or highlight of a pixel the classifier did not call foreground: its
+// brightness change along the mean colour, in grey levels, against the noise.
+PixelClass BackgroundModel::BrightnessClass(const Image& frame, std::size_t i, const ClassifyPlanes& planes) const {
+  const float m[3] = {static_cast<float>(planes.mean_r[i]), static_cast<float>(planes.mean_g[i]),
+                      static_cast<float>(planes.mean_b[i])};
+  const std::uint8_t* v = &frame.data[i * 3];
+  const float norm_sq = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
+  const float dot = v[0] * m[0] + v[1] * m[1] + v[2] * m[2];
+  const float change = (dot - norm_sq) / std::sqrt(norm_sq);
+  const float sigma = planes.spread[i] * kSpreadStep;
+  if (change < -options_.brightness_threshold * sigma) return PixelClass::kShadow;
+  if (change > options_.brightness_threshold * sigma) return PixelClass::kHighlight;
+  return PixelClass::kBackground;
+}
+
+Image BackgroundModel::Classify(const Image& frame, Image* labels) const {
+  if (frame.width != width_ || frame.height != height_ || frame.channels != 3 || frame.type != PixelType::kUInt8)
+    std::abort();  // internal invariant: callers check sizes and convert to 8-bit RGB
+  Image mask(width_, height_, 1);
   const std::size_t pixels = static_cast<std::size_t>(width_) * height_;
   const ClassifyPlanes planes = PlanesOf(packed_.data(), pixels);
-  ClassifyPixels(frame.data.data(), planes, pixels, params, mask.data.data());
+  ClassifyPixels(frame.data.data(), planes, pixels, Params(), mask.data.data());
   if (labels != nullptr) {
     *labels = Image(width_, height_, 1);
-    for (std::size_t i = 0; i < pixels; ++i) {
-      if (mask.data[i]) {
-        labels->data[i] = static_cast<std::uint8_t>(PixelClass::kForeground);
-        continue;
-      }
-      const float m[3] = {static_cast<float>(planes.mean_r[i]), static_cast<float>(planes.mean_g[i]),
-                          static_cast<float>(planes.mean_b[i])};
-      const std::uint8_t* v = &frame.data[i * 3];
-      const float norm_sq = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
-      const float dot = v[0] * m[0] + v[1] * m[1] + v[2] * m[2];
-      // Brightness change in grey levels along the mean colour, against the noise.
-      const float change = (dot - norm_sq) / std::sqrt(norm_sq);
-      const float sigma = planes.spread[i] * kSpreadStep;
-      PixelClass label = PixelClass::kBackground;
-      if (change < -options_.brightness_threshold * sigma) label = PixelClass::kShadow;
-      if (change > options_.brightness_threshold * sigma) label = PixelClass::kHighlight;
-      labels->data[i] = static_cast<std::uint8_t>(label);
-    }
+    for (std::size_t i = 0; i < pixels; ++i)
+      labels->data[i] = static_cast<std::uint8_t>(mask.data[i] ? PixelClass::kForeground
+                                                                : BrightnessClass(frame, i, planes));
   }
   return mask;
+}
+
+PixelClass BackgroundModel::ClassOf(const Image& frame, int x, int y) const {
+  if (frame.width != width_ || frame.height != height_ || frame.channels != 3 || frame.type != PixelType::kUInt8 ||
+      x < 0 || y < 0 || x >= width_ || y >= height_)
+    std::abort();  // internal invariant, as Classify
+  const std::size_t pixels = static_cast<std::size_t>(width_) * height_;
+  const std::size_t i = static_cast<std::size_t>(y) * width_ + x;
+  const ClassifyPlanes planes = PlanesOf(packed_.data(), pixels);
+  const std::uint8_t mean[3] = {planes.mean_r[i], planes.mean_g[i], planes.mean_b[i]};
+  if (ClassifyPixelReference(&frame.data[i * 3], mean, planes.spread[i], planes.low[i], planes.high[i], Params()))
+    return PixelClass::kForeground;
+  return BrightnessClass(frame, i, planes);
 }
 
 void BackgroundModel::Adapt(const std::vector<Image>& frames) {

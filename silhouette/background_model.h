@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/image.h"
+#include "silhouette/classify_kernel.h"
 
 namespace confluent {
 
@@ -82,6 +83,8 @@ class BackgroundModel {
   Image Classify(const Image& frame) const;
   // As Classify, writing a PixelClass per pixel into `labels` (1 channel) as well.
   Image Classify(const Image& frame, Image* labels) const;
+  // The class of one pixel (x, y) of `frame`, as Classify's labels give it.
+  PixelClass ClassOf(const Image& frame, int x, int y) const;
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -97,6 +100,8 @@ class BackgroundModel {
  private:
   // Rebuilds the packed per-pixel classifier parameters from mean_ and spread_.
   void Pack();
+  ClassifyParams Params() const;
+  PixelClass BrightnessClass(const Image& frame, std::size_t pixel, const ClassifyPlanes& planes) const;
 
   BackgroundModelOptions options_;
   int width_ = 0;

@@ -136,9 +136,10 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
     if (options.plate_claim_inside_hull && !views.empty())
       ParallelFor(num_cameras, options.threads, [&](int c) {
         if (excluded(c) || extractors[c]->info().method != SilhouetteMethod::kPlate || hulls[c].empty()) return;
-        Image labels;
-        extractors[c]->model().Classify(ToRgb8(images[c]), &labels);
-        const int added = ClaimHighlightsInsideHull(&masks[c], labels, hulls[c], multiview);
+        Image converted;  // only when the frame is not 8-bit RGB already
+        const bool rgb8 = images[c].type == PixelType::kUInt8 && images[c].channels == 3;
+        const Image& rgb = rgb8 ? images[c] : (converted = ToRgb8(images[c]));
+        const int added = ClaimHighlightsInsideHull(&masks[c], rgb, extractors[c]->model(), hulls[c], multiview);
         if (added == 0) return;
         const Image cleaned = CleanMask(masks[c], options.cleanup);
         std::size_t changed = 0;

@@ -173,26 +173,32 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   return result;
 }
 
-int ClaimHighlightsInsideHull(Image* mask, const Image& labels, const Image& hull, const MultiViewOptions& options) {
-  if (labels.width != mask->width || labels.height != mask->height || hull.width != mask->width ||
-      hull.height != mask->height)
-    throw UsageError("ClaimHighlightsInsideHull: mask, labels and hull must have one size");
+int ClaimHighlightsInsideHull(Image* mask, const Image& frame, const BackgroundModel& model, const Image& hull,
+                              const MultiViewOptions& options) {
+  if (frame.width != mask->width || frame.height != mask->height || hull.width != mask->width ||
+      hull.height != mask->height || model.width() != mask->width || model.height() != mask->height)
+    throw UsageError("ClaimHighlightsInsideHull: mask, frame, model and hull must have one size");
+  if (frame.channels != 3 || frame.type != PixelType::kUInt8)
+    throw UsageError("ClaimHighlightsInsideHull: the frame must be 8-bit RGB");
+  // Only the hull's box (with room for the closing) is worked on.
   const int deep = ScaledRadius(options.hole_margin, mask->width);
-  cv::Mat inside = AsCvMat(hull).clone();
+  const cv::Rect box = cv::boundingRect(AsCvMat(hull));
+  if (box.empty()) return 0;
+  const cv::Rect roi =
+      (box + cv::Size(2 * deep, 2 * deep) - cv::Point(deep, deep)) & cv::Rect(0, 0, mask->width, mask->height);
+  cv::Mat inside = AsCvMat(hull)(roi).clone();
   if (deep > 0) {
     // Closed first: the projected voxels leave pinholes that erosion would widen.
     cv::morphologyEx(inside, inside, cv::MORPH_CLOSE, Disk(deep), cv::Point(-1, -1), 1, cv::BORDER_CONSTANT,
                      cv::Scalar(0));
     cv::erode(inside, inside, Disk(deep));
   }
-  const std::uint8_t highlight = static_cast<std::uint8_t>(PixelClass::kHighlight);
   int added = 0;
-  for (int y = 0; y < mask->height; ++y) {
+  for (int y = 0; y < roi.height; ++y) {
     const std::uint8_t* within = inside.ptr<std::uint8_t>(y);
-    const std::uint8_t* label = &labels.at<std::uint8_t>(0, y);
-    std::uint8_t* out = &mask->at<std::uint8_t>(0, y);
-    for (int x = 0; x < mask->width; ++x)
-      if (within[x] != 0 && out[x] == 0 && label[x] == highlight) {
+    std::uint8_t* out = &mask->at<std::uint8_t>(roi.x, roi.y + y);
+    for (int x = 0; x < roi.width; ++x)
+      if (within[x] != 0 && out[x] == 0 && model.ClassOf(frame, roi.x + x, roi.y + y) == PixelClass::kHighlight) {
         out[x] = 255;
         ++added;
       }

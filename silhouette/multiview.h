@@ -55,13 +55,14 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
                                             const MultiViewOptions& options, std::vector<Image>* hulls = nullptr,
                                             std::vector<Image>* strict_hulls = nullptr);
 
-// Claims for `mask` (1-channel 0/255, from a clean plate) the pixels that the plate's classifier
-// called a highlight of the background (`labels`: a PixelClass per pixel, from
-// BackgroundModel::Classify) where `hull` (the other cameras' projected hull, eroded by
-// options.hole_margin) says the actor is: skin over a beige floor is a "highlight" of the floor.
-// Shadows are left alone: the actor's own shadow lies on the floor beside the feet, which a
-// coarse hull covers. Returns the number of pixels added.
-int ClaimHighlightsInsideHull(Image* mask, const Image& labels, const Image& hull, const MultiViewOptions& options);
+// Claims for `mask` (1-channel 0/255, made with `model` from a clean plate) the pixels of
+// `frame` (8-bit RGB) that the model calls a highlight of the background where `hull` (the
+// other cameras' projected hull, closed and eroded by options.hole_margin) says the actor is:
+// skin over a beige floor is a "highlight" of the floor. Shadows are left alone: the actor's own
+// shadow lies on the floor beside the feet, which a coarse hull covers. Returns the number of
+// pixels added. Throws UsageError when the sizes differ.
+int ClaimHighlightsInsideHull(Image* mask, const Image& frame, const BackgroundModel& model, const Image& hull,
+                              const MultiViewOptions& options);
 
 // How far a set of masks can be trusted, from a sample of frames.
 // One checked camera-frame.

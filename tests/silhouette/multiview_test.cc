@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "core/error.h"
+#include "silhouette/background_model.h"
 #include "silhouette/multiview.h"
 #include "silhouette/plate_free.h"
 #include "tests/silhouette/multiview_scene.h"
@@ -112,22 +113,35 @@ TEST(MultiView, HighlightsInsideTheOthersHullAreClaimedButNotShadowsOrHighlights
   std::vector<Image> masks;
   for (const Camera& camera : rig.cameras) masks.push_back(testing::RenderMask(camera, actor));
   const Image truth = masks[3];
+  // cam3 sees a grey plate; its frame shows two patches of the torso as 1.25 and 0.8 times the
+  // plate's grey (a highlight and a shadow to the model), and a highlight far from the actor.
+  Image plate(320, 240, 3);
+  std::fill(plate.data.begin(), plate.data.end(), 100);
+  const BackgroundModel model = BackgroundModel::FromPlates({plate}, BackgroundModelOptions{});
   const Eigen::Vector2d torso = rig.cameras[3].Project(Eigen::Vector3d(0, 0, 1.2));
   const int tx = static_cast<int>(torso.x()), ty = static_cast<int>(torso.y());
-  // cam3's plate mask lost two patches of the torso: one the classifier saw as a highlight of
-  // the background, one as a shadow. A highlight far from the actor is not the actor either.
+  Image frame = plate;
+  auto paint = [&frame](int x0, int y0, int x1, int y1, std::uint8_t grey) {
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x)
+        for (int k = 0; k < 3; ++k) frame.at<std::uint8_t>(x, y, k) = grey;
+  };
+  paint(tx - 8, ty - 10, tx, ty, 125);
+  paint(tx, ty, tx + 8, ty + 10, 80);
+  paint(5, 5, 25, 25, 125);
+  ASSERT_EQ(model.ClassOf(frame, tx - 4, ty - 5), PixelClass::kHighlight);
+  ASSERT_EQ(model.ClassOf(frame, tx + 4, ty + 5), PixelClass::kShadow);
+  ASSERT_EQ(model.ClassOf(frame, 15, 15), PixelClass::kHighlight);
+  // The plate mask lost both torso patches.
   Fill(&masks[3], tx - 8, ty - 10, tx, ty, 0);
   Fill(&masks[3], tx, ty, tx + 8, ty + 10, 0);
-  Image labels(320, 240, 1);
-  Fill(&labels, tx - 8, ty - 10, tx, ty, static_cast<std::uint8_t>(PixelClass::kHighlight));
-  Fill(&labels, tx, ty, tx + 8, ty + 10, static_cast<std::uint8_t>(PixelClass::kShadow));
-  Fill(&labels, 5, 5, 25, 25, static_cast<std::uint8_t>(PixelClass::kHighlight));
   std::vector<Image> hulls;
   CheckMultiView(rig, &masks, {}, MultiViewOptions{}, &hulls);
   ASSERT_FALSE(hulls[3].empty());
   Image claimed = masks[3];
-  const int added = ClaimHighlightsInsideHull(&claimed, labels, hulls[3], MultiViewOptions{});
-  EXPECT_EQ(added, 80);  // the whole highlight patch, nothing else
+  // The whole highlight patch and nothing else (the hull's pinholes, at 128 voxels, would keep
+  // 25 of its 80 pixels out without the closing).
+  EXPECT_EQ(ClaimHighlightsInsideHull(&claimed, frame, model, hulls[3], MultiViewOptions{}), 80);
   for (int y = 0; y < 240; ++y)
     for (int x = 0; x < 320; ++x) {
       const bool highlight_patch = x >= tx - 8 && x < tx && y >= ty - 10 && y < ty;
@@ -135,8 +149,8 @@ TEST(MultiView, HighlightsInsideTheOthersHullAreClaimedButNotShadowsOrHighlights
           << x << "," << y;
     }
   EXPECT_GT(Iou(claimed, truth), Iou(masks[3], truth));
-  Image wrong_size(160, 120, 1);
-  EXPECT_THROW(ClaimHighlightsInsideHull(&claimed, wrong_size, hulls[3], MultiViewOptions{}), UsageError);
+  EXPECT_THROW(ClaimHighlightsInsideHull(&claimed, Image(160, 120, 3), model, hulls[3], MultiViewOptions{}),
+               UsageError);
 }
 
 TEST(MultiView, TrustAssessmentWarnsAboutAShiftedCameraOnly) {
