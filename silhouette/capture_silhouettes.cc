@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <utility>
 
 #include "core/error.h"
 #include "core/parallel.h"
@@ -53,6 +54,14 @@ void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& opt
     (*extractors)[c] = std::make_unique<SilhouetteExtractor>(capture.rig().cameras[c].name, std::move(models[c]),
                                                              std::move(warnings), options);
   }
+}
+
+// Replaces `*mask` by `corrected` and returns how many pixels changed (reported as corrected).
+int ReplaceMask(Image* mask, Image corrected) {
+  int changed = 0;
+  for (std::size_t i = 0; i < corrected.data.size(); ++i) changed += corrected.data[i] != mask->data[i];
+  *mask = std::move(corrected);
+  return changed;
 }
 
 }  // namespace
@@ -140,22 +149,14 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         const bool rgb8 = images[c].type == PixelType::kUInt8 && images[c].channels == 3;
         const Image& rgb = rgb8 ? images[c] : (converted = ToRgb8(images[c]));
         const int added = ClaimHighlightsInsideHull(&masks[c], rgb, extractors[c]->model(), hulls[c], multiview);
-        if (added == 0) return;
-        const Image cleaned = CleanMask(masks[c], options.cleanup);
-        std::size_t changed = 0;
-        for (std::size_t i = 0; i < cleaned.data.size(); ++i) changed += cleaned.data[i] != masks[c].data[i];
-        views[c].added += added + static_cast<int>(changed);  // counted as corrected pixels
-        masks[c] = cleaned;
+        if (added > 0) views[c].added += added + ReplaceMask(&masks[c], CleanMask(masks[c], options.cleanup));
       });
     if (options.grabcut_learned && !views.empty())
       ParallelFor(num_cameras, options.threads, [&](int c) {
         if (!correct[c] || extractors[c]->info().method != SilhouetteMethod::kLearned) return;
-        const Image refined = CleanMask(RefineMaskGrabCut(ToRgb8(images[c]), masks[c], strict_hulls[c], options.grabcut),
-                                        options.cleanup);
-        std::size_t changed = 0;
-        for (std::size_t i = 0; i < refined.data.size(); ++i) changed += refined.data[i] != masks[c].data[i];
-        views[c].added += static_cast<int>(changed);  // counted as corrected pixels
-        masks[c] = refined;
+        views[c].added += ReplaceMask(
+            &masks[c], CleanMask(RefineMaskGrabCut(ToRgb8(images[c]), masks[c], strict_hulls[c], options.grabcut),
+                                 options.cleanup));
       });
     for (int c = 0; c < num_cameras; ++c) {
       MaskSummary& check = checks[c];
