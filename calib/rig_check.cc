@@ -307,13 +307,20 @@ double MaskIoU(const Image& a, const Image& b) {
   if (a.width != b.width || a.height != b.height) throw UsageError("MaskIoU: masks differ in size");
   long intersection = 0, union_count = 0;
   const std::size_t pixels = static_cast<std::size_t>(a.width) * a.height;
-  if (a.channels == 1 && b.channels == 1) {  // the common case, in a loop the compiler vectorises
+  if (a.channels == 1 && b.channels == 1) {  // the common case, in loops the compiler vectorises
     const std::uint8_t* pa = a.data.data();
     const std::uint8_t* pb = b.data.data();
-    for (std::size_t i = 0; i < pixels; ++i) {
-      const int in_a = pa[i] >> 7, in_b = pb[i] >> 7;
-      intersection += in_a & in_b;
-      union_count += in_a | in_b;
+    // 32-bit counts per block of pixels, which vectorise four times wider than 64-bit ones.
+    constexpr std::size_t kBlock = std::size_t{1} << 24;
+    for (std::size_t begin = 0; begin < pixels; begin += kBlock) {
+      const std::size_t end = std::min(pixels, begin + kBlock);
+      std::uint32_t block_intersection = 0, block_union = 0;
+      for (std::size_t i = begin; i < end; ++i) {
+        block_intersection += static_cast<std::uint8_t>(pa[i] & pb[i]) >> 7;
+        block_union += static_cast<std::uint8_t>(pa[i] | pb[i]) >> 7;
+      }
+      intersection += block_intersection;
+      union_count += block_union;
     }
     return union_count == 0 ? 1.0 : static_cast<double>(intersection) / union_count;
   }
