@@ -87,11 +87,13 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
   summary.cameras.resize(num_cameras);
   summary.masks.resize(static_cast<std::size_t>(num_cameras) * num_frames);
 
+  // Every extractor is prepared at the capture's first frame whatever the range, so that shards
+  // (--frames A:B) write the masks of one run over the whole capture.
   std::vector<std::unique_ptr<SilhouetteExtractor>> extractors(num_cameras);
   ParallelFor(num_cameras, options.threads, [&](int c) {
     extractors[c] = std::make_unique<SilhouetteExtractor>(
         capture.rig().cameras[c].name, capture.BackgroundPath(c),
-        [&capture, c](int frame) { return capture.ReadFrame(c, frame); }, capture.num_frames(), first_frame, options);
+        [&capture, c](int frame) { return capture.ReadFrame(c, frame); }, capture.num_frames(), 0, options);
   });
   if (options.plate_free_multiview) LearnPlateFreeTogether(capture, options, &extractors);
   bool mog2 = false;

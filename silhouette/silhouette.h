@@ -181,8 +181,10 @@ using MaskSink = std::function<void(int camera, int frame, const Image& image, c
 // plates or frames, UsageError for a bad range or options.
 // `resume_at` (empty, or one frame per camera in [first_frame, end_frame]) resumes a camera
 // there: its earlier frames reach neither the sink nor the progress (they are still extracted
-// from the earliest resumed frame on, for the multi-view check; MOG2 sees every frame), while the
-// extractor is prepared at first_frame as in an uninterrupted run.
+// from the earliest resumed frame on, for the multi-view check; MOG2 sees every frame). The
+// extractors are prepared at frame 0 whatever the range (plate adaptation, method detection), so
+// that a range gives the masks of a run over the whole capture (except MOG2, which learns from
+// the frames it sees).
 SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, int end_frame,
                                      const SilhouetteOptions& options, const MaskSink& sink,
                                      const ProgressCallback& progress = {}, const std::vector<int>& resume_at = {});
