@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <memory>
 #include <filesystem>
 
@@ -81,8 +82,11 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   ConfluentMotion motion(scan, reference, correspondences, {}, inputs.scan_path, correspondences_path);
   timings->Add("deform_factor", -1, NowSeconds() - factor_start);
   fs::create_directories(folder.Path("scan"));
-  // Silhouette refinement against the cameras the run uses, then photo consistency.
-  std::unique_ptr<FrameRefinement> refinement;
+  // Silhouette refinement against the cameras the run uses, then photo consistency. Without
+  // keyframes every frame's refinement is independent of the others': two consecutive frames are
+  // refined side by side, each by its own refiner (the same partitions of the work as one frame
+  // alone, so the same result), which fills the cores that one frame's serial steps leave idle.
+  std::vector<std::unique_ptr<FrameRefinement>> refiners;
   const std::vector<int> used_indices = inputs.cameras.used();
   if (inputs.refine_silhouettes) {
     const double refine_start = NowSeconds();
@@ -93,9 +97,15 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     options.carried_silhouette_rounds = std::min(options.carried_silhouette_rounds, inputs.refine_iterations);
     options.threads = inputs.threads;
     options.keyframe_interval = inputs.refine_keyframes;
-    refinement = std::make_unique<FrameRefinement>(scan, inputs.cameras.UsedCameras(inputs.capture->rig()), options);
+    const int lanes = inputs.refine_keyframes == 1 && inputs.threads >= 2 && todo.size() >= 2 ? 2 : 1;
+    refiners.resize(lanes);
+    const std::vector<Camera> used_cameras = inputs.cameras.UsedCameras(inputs.capture->rig());
+    ParallelFor(lanes, lanes, [&](int lane) {
+      refiners[lane] = std::make_unique<FrameRefinement>(scan, used_cameras, options);
+    });
     timings->Add("refine_factor", -1, NowSeconds() - refine_start);
   }
+  FrameRefinement* const refinement = refiners.empty() ? nullptr : refiners.front().get();
   double iou_before = 0.0, iou_after = 0.0;
   int iou_views = 0;
   double flow_before = 0.0, flow_after = 0.0;
@@ -123,59 +133,115 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   auto read_images = [&](int frame) {
     return inputs.refine_photo ? inputs.capture->ReadFrames(used_indices, frame, inputs.threads) : std::vector<Image>();
   };
+  // One frame on its way through the stage.
+  struct FrameWork {
+    int frame = 0;
+    Mesh animated;
+    DeformSummary deform;
+    std::vector<Image> masks, images;
+    double masks_read = 0.0, images_read = 0.0;
+    FrameRefinementSummary refined;
+  };
   int done = 0;
   int previous = -2;
   std::vector<int> singular_frames;
-  for (int frame : todo) {
+  for (std::size_t next = 0; next < todo.size();) {
+    // This batch: the next frame, and the one after it where a second refiner can take it.
+    std::vector<FrameWork> batch(1);
+    batch[0].frame = todo[next];
+    if (refiners.size() == 2 && next + 1 < todo.size() && todo[next + 1] == todo[next] + 1) {
+      batch.emplace_back();
+      batch[1].frame = todo[next + 1];
+    }
+    next += batch.size();
+    const int frame = batch[0].frame;
     if (previous != frame - 1) {
-      // Sign consistency and the intermediate reference follow the previous frame, the refinement
-      // the frames since the keyframe: replay them when this invocation starts in the middle.
-      // Without their tracked templates (shards run side by side) the frame's refinement starts
-      // from its deformation.
+      // The deformation carries state through every frame before (quaternion signs kept
+      // continuous over the whole sequence, the intermediate reference, SLERP paths), the
+      // refinement through the frames since the keyframe: when this invocation starts in the
+      // middle, both are replayed, the deformation from frame 0 where every earlier frame is
+      // tracked, so that the scans are those of one uninterrupted run. Without the earlier
+      // templates (shards run side by side) the deformation starts from the previous frame where
+      // it is tracked, else afresh, and the refinement from the frame's own deformation.
       int first = frame;  // the first frame replayed with its refinement
       if (refinement)
         while (first > 0 && !refinement->IsKeyframe(first)) --first;
-      bool tracked = true;
-      for (int earlier = std::max(0, first - 1); earlier < frame; ++earlier)
-        tracked = tracked && fs::exists(folder.TemplatePath(earlier));
-      if (!tracked) first = frame;
-      if (first > 0 && fs::exists(folder.TemplatePath(first - 1))) motion.Deform(template_vertices(first - 1));
+      auto tracked_from = [&](int begin) {
+        for (int earlier = std::max(0, begin); earlier < frame; ++earlier)
+          if (!fs::exists(folder.TemplatePath(earlier))) return false;
+        return true;
+      };
+      if (tracked_from(0)) {
+        for (int earlier = 0; earlier < first; ++earlier) motion.Deform(template_vertices(earlier));
+      } else {
+        if (!tracked_from(first - 1)) first = frame;
+        if (first > 0 && fs::exists(folder.TemplatePath(first - 1))) motion.Deform(template_vertices(first - 1));
+      }
       for (int earlier = first; earlier < frame; ++earlier)
         refinement->Refine(earlier, motion.Deform(template_vertices(earlier)), read_masks(earlier), read_images(earlier));
     }
-    const double frame_start = NowSeconds();
-    DeformSummary summary;
-    Mesh animated = scan;
-    animated.vertices = motion.Deform(template_vertices(frame), &summary);
-    timings->Add("deform", frame, NowSeconds() - frame_start);
-    if (refinement) {
+    for (FrameWork& work : batch) {
+      const double frame_start = NowSeconds();
+      work.animated = scan;
+      work.animated.vertices = motion.Deform(template_vertices(work.frame), &work.deform);
+      timings->Add("deform", work.frame, NowSeconds() - frame_start);
+      if (!refinement) continue;
       const double read_start = NowSeconds();
-      const std::vector<Image> masks = read_masks(frame);
-      const double masks_read = NowSeconds() - read_start;
-      const std::vector<Image> images = read_images(frame);
-      const double images_read = NowSeconds() - read_start - masks_read;
-      FrameRefinementSummary refined;
-      animated.vertices = refinement->Refine(frame, animated.vertices, masks, images, &refined);
-      // How far the refinement brought the frames that start from their deformation.
-      for (std::size_t i = 0; i < refined.iou_start.size() && !refined.carried; ++i)
-        if (!std::isnan(refined.iou_start[i])) iou_before += refined.iou_start[i], iou_after += refined.iou_after[i], ++iou_views;
-      if (refined.photo.rounds > 0 && !refined.carried)
-        flow_before += refined.photo.first_flow_px, flow_after += refined.photo.last_flow_px, ++flow_frames;
-      if (refined.carried) ++carried_frames;
-      timings->Add("refine_read", frame, masks_read);
-      timings->Add("refine", frame, refined.silhouette_seconds);
-      if (inputs.refine_photo) {
-        timings->Add("photo_refine_read", frame, images_read);
-        timings->Add("photo_refine", frame, refined.photo_seconds);
+      work.masks = read_masks(work.frame);
+      work.masks_read = NowSeconds() - read_start;
+      work.images = read_images(work.frame);
+      work.images_read = NowSeconds() - read_start - work.masks_read;
+    }
+    if (refinement) {
+      const double refine_start = NowSeconds();
+      // A frame whose refinement fails does not cost the other its result: that one is written first.
+      std::vector<std::exception_ptr> failures(batch.size());
+      ParallelFor(static_cast<int>(batch.size()), static_cast<int>(batch.size()), [&](int lane) {
+        FrameWork& work = batch[lane];
+        try {
+          work.animated.vertices =
+              refiners[lane]->Refine(work.frame, work.animated.vertices, work.masks, work.images, &work.refined);
+        } catch (...) {
+          failures[lane] = std::current_exception();
+        }
+      });
+      for (std::size_t lane = 0; lane < batch.size(); ++lane)
+        if (failures[lane]) {
+          for (std::size_t other = 0; other < lane; ++other) WriteMesh(folder.ScanPath(batch[other].frame), batch[other].animated);
+          std::rethrow_exception(failures[lane]);
+        }
+      // Frames refined side by side: each is charged its share of the batch's wall time.
+      double lane_seconds = 0.0;
+      for (const FrameWork& work : batch) lane_seconds += work.refined.silhouette_seconds + work.refined.photo_seconds;
+      const double share = batch.size() > 1 && lane_seconds > 0.0 ? (NowSeconds() - refine_start) / lane_seconds : 1.0;
+      for (FrameWork& work : batch) {
+        const FrameRefinementSummary& refined = work.refined;
+        // How far the refinement brought the frames that start from their deformation.
+        for (std::size_t i = 0; i < refined.iou_start.size() && !refined.carried; ++i)
+          if (!std::isnan(refined.iou_start[i]))
+            iou_before += refined.iou_start[i], iou_after += refined.iou_after[i], ++iou_views;
+        if (refined.photo.rounds > 0 && !refined.carried)
+          flow_before += refined.photo.first_flow_px, flow_after += refined.photo.last_flow_px, ++flow_frames;
+        if (refined.carried) ++carried_frames;
+        timings->Add("refine_read", work.frame, work.masks_read);
+        timings->Add("refine", work.frame, share * refined.silhouette_seconds);
+        if (inputs.refine_photo) {
+          timings->Add("photo_refine_read", work.frame, work.images_read);
+          timings->Add("photo_refine", work.frame, share * refined.photo_seconds);
+        }
+        work.masks.clear();
+        work.images.clear();
       }
     }
-    const double write_start = NowSeconds();
-    WriteMesh(folder.ScanPath(frame), animated);
-    timings->Add("deform_write", frame, NowSeconds() - write_start);
-    if (summary.singular) singular_frames.push_back(frame);
-    previous = frame;
-    ++report.computed;
-    ReportProgress(progress, "deform", ++done, todo.size(), "frame " + std::to_string(frame));
+    for (const FrameWork& work : batch) {
+      const double write_start = NowSeconds();
+      WriteMesh(folder.ScanPath(work.frame), work.animated);
+      timings->Add("deform_write", work.frame, NowSeconds() - write_start);
+      if (work.deform.singular) singular_frames.push_back(work.frame);
+      previous = work.frame;
+      ++report.computed;
+      ReportProgress(progress, "deform", ++done, todo.size(), "frame " + std::to_string(work.frame));
+    }
   }
   if (iou_views > 0) {
     char line[200];

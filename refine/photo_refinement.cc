@@ -141,7 +141,9 @@ struct PhotoRefiner::Impl {
         samples.push_back({x, y, face, point, static_cast<float>(pixel.x()), static_cast<float>(pixel.y())});
       }
     cv::Mat flow;
-    cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
+    // The fast preset's patches and fewer descent steps at the same finest scale: 10-17% less
+    // photo-refinement time than the medium preset, held-out PSNR within 0.02 dB (issue 23).
+    cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_FAST);
     dis->setFinestScale(options.flow_finest_scale);
     dis->calc(warped, real, flow);
     // Where b's colour landed in a: the surface point both saw lies on a's ray through that pixel
