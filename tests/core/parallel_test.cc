@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -32,6 +33,9 @@ TEST(ParallelFor, RethrowsTheErrorOfAJobAndStopsHandingOutWork) {
                            [&](int i) {
                              ++started;
                              if (i == 3) throw std::runtime_error("job 3 failed");
+                             // A job that takes a while: instant jobs could all be handed out
+                             // by the other thread before job 3's error is seen.
+                             std::this_thread::sleep_for(std::chrono::microseconds(200));
                            }),
                std::runtime_error);
   EXPECT_LT(started.load(), 1000);
