@@ -158,21 +158,23 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     if (previous != frame - 1) {
       // The deformation carries state through every frame before (quaternion signs kept
       // continuous over the whole sequence, the intermediate reference, SLERP paths), the
-      // refinement through the frames since the keyframe: when this invocation starts in the
-      // middle, both are replayed, the deformation from frame 0 where every earlier frame is
-      // tracked, so that the scans are those of one uninterrupted run. Without the earlier
-      // templates (shards run side by side) the deformation starts from the previous frame where
-      // it is tracked, else afresh, and the refinement from the frame's own deformation.
+      // refinement through the frames since the keyframe. Where this invocation starts in the
+      // middle, or skips finished frames, both chains are carried on from where they stand (frame
+      // 0, or the frame after `previous`) so that the scans are those of one uninterrupted run.
+      // Without the templates in between (shards run side by side) the deformation starts from
+      // the previous frame where it is tracked, else afresh, and the refinement from the frame's
+      // own deformation.
+      const int chained = previous >= 0 ? previous + 1 : 0;
       int first = frame;  // the first frame replayed with its refinement
       if (refinement)
-        while (first > 0 && !refinement->IsKeyframe(first)) --first;
+        while (first > chained && !refinement->IsKeyframe(first)) --first;
       auto tracked_from = [&](int begin) {
         for (int earlier = std::max(0, begin); earlier < frame; ++earlier)
           if (!fs::exists(folder.TemplatePath(earlier))) return false;
         return true;
       };
-      if (tracked_from(0)) {
-        for (int earlier = 0; earlier < first; ++earlier) motion.Deform(template_vertices(earlier));
+      if (tracked_from(chained)) {
+        for (int earlier = chained; earlier < first; ++earlier) motion.Deform(template_vertices(earlier));
       } else {
         if (!tracked_from(first - 1)) first = frame;
         if (first > 0 && fs::exists(folder.TemplatePath(first - 1))) motion.Deform(template_vertices(first - 1));

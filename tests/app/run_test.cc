@@ -359,6 +359,25 @@ TEST_F(RunCommandTest, FramesRefinedSideBySideMatchShardsThatPairThemDifferently
     }
 }
 
+// Scans missing here and there (frames 2, 5 and 9; refinement keyframes at 0, 3, 6 and 9) are
+// recomputed as the uninterrupted run wrote them: the deformation and the refinement carry on
+// over the finished frames in between.
+TEST_F(RunCommandTest, ScansMissingHereAndThereAreRewrittenAsOneRunWroteThem) {
+  const auto reference = RunOutputs(ReferenceRun());
+  testing::TempDir out;
+  const std::string run = out / "run";
+  fs::copy(ReferenceRun(), run, fs::copy_options::recursive);
+  for (const char* frame : {"000002", "000005", "000009"}) ASSERT_TRUE(fs::remove(run + "/scan/" + frame + ".ply"));
+  const testing::CommandResult result = RunConfluent(RunArgs(run));
+  ASSERT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
+  const auto rewritten = RunOutputs(run);
+  for (const char* frame : {"000002", "000005", "000009"}) {
+    const std::string file = std::string("scan/") + frame + ".ply";
+    ASSERT_TRUE(rewritten.count(file)) << file;
+    EXPECT_TRUE(rewritten.at(file) == reference.at(file)) << file << " differs from the uninterrupted run's";
+  }
+}
+
 TEST_F(RunCommandTest, WrongExcludedCameraNameIsRefused) {
   testing::TempDir out;
   const testing::CommandResult result =
