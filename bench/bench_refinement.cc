@@ -2,7 +2,8 @@
 // silhouette refinement (18 rounds) and the photo-consistency refinement (5 rounds, without the
 // 6 silhouette rounds that follow it in the run). Self-contained: a textured ~50K-vertex sphere
 // of radius 0.4 m seen by 8 ring cameras at 1024x768 (about 4.3 mm per pixel, as the studio
-// default), the start shrunk, shifted and bulged by a few millimetres.
+// default), the start shrunk, shifted and bulged by a few millimetres. And the scan's own
+// silhouette in one camera, as each refinement round draws it for every camera.
 
 #include <benchmark/benchmark.h>
 
@@ -13,6 +14,7 @@
 #include "refine/silhouette_refinement.h"
 #include "render/renderer.h"
 #include "silhouette/overlap.h"
+#include "silhouette/rim_silhouette.h"
 
 namespace confluent {
 namespace {
@@ -77,6 +79,20 @@ void BM_PhotoRefineFrame(benchmark::State& state) {
   state.counters["flow_px_last"] = summary.last_flow_px;
 }
 
+// Argument 0: every facing triangle filled (RasterizeClosedMesh); 1: the rim edges' winding
+// fill (RimSilhouetteRasterizer), the refinement's since 2026-11-26.
+void BM_ScanSilhouetteOneCamera(benchmark::State& state) {
+  const Scene& scene = GetScene();
+  Mesh posed = scene.truth;
+  posed.vertices = scene.start;
+  const RimSilhouetteRasterizer rim(posed.faces);
+  for (auto _ : state)
+    benchmark::DoNotOptimize(state.range(0) ? rim.Rasterize(posed.vertices, scene.cameras[1])
+                                            : RasterizeClosedMesh(posed, scene.cameras[1]));
+  state.counters["faces"] = posed.num_faces();
+}
+
+BENCHMARK(BM_ScanSilhouetteOneCamera)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SilhouetteRefineFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
 // Argument: the flow's finest pyramid level (1, the default: half resolution; 0: full).
 BENCHMARK(BM_PhotoRefineFrame)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -11,6 +11,7 @@
 #include "core/mesh_validation.h"
 #include "refine/normalised_diffusion.h"
 #include "silhouette/overlap.h"
+#include "silhouette/rim_silhouette.h"
 
 namespace confluent {
 
@@ -41,6 +42,7 @@ struct SilhouetteRefiner::Impl {
   RowMatrixX3i faces;
   std::unique_ptr<NormalisedDiffusion> spread;  // of the rim steps over the surface
   bool closed = false;    // watertight: the fast facing-triangle raster gives the silhouette
+  std::unique_ptr<RimSilhouetteRasterizer> rim;  // faster still, when the scan is closed and oriented
 
   // Sums, per vertex, the 3D steps that bring it onto `mask`'s edge where it lies on the outline
   // of `mesh` in `camera` (`own` is that outline's silhouette).
@@ -90,6 +92,7 @@ SilhouetteRefiner::SilhouetteRefiner(const Mesh& scan, const SilhouetteRefinemen
   impl_->options = options;
   impl_->faces = scan.faces;
   impl_->closed = ValidateMesh(scan).is_watertight();
+  impl_->rim = std::make_unique<RimSilhouetteRasterizer>(scan.faces);
   if (scan.num_faces() == 0) throw InputError("scan", "silhouette refinement: the scan has no faces");
   impl_->spread = std::make_unique<NormalisedDiffusion>(scan, options.spread_stiffness, "scan");
   impl_->spread->set_threads(options.threads);
@@ -120,8 +123,10 @@ RowMatrixX3d SilhouetteRefiner::Refine(const RowMatrixX3d& vertices, const std::
   mesh.faces = s.faces;
   if (!vertices.allFinite()) throw std::invalid_argument("Refine: non-finite vertices");
   const RowMatrixX3d start = vertices;
-  // The scan's own silhouette: the fast facing-triangle fill when the scan is watertight.
+  // The scan's own silhouette: the rim fill when the scan is closed and consistently oriented,
+  // else the facing-triangle fill when it is watertight.
   auto silhouette = [&s](const Mesh& posed, const Camera& camera) {
+    if (s.rim->closed()) return s.rim->Rasterize(posed.vertices, camera);
     return s.closed ? RasterizeClosedMesh(posed, camera) : RasterizeSilhouette(posed, camera);
   };
   const int threads = std::max(1, std::min<int>(s.options.threads, static_cast<int>(usable.size())));
