@@ -222,7 +222,10 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
     if (summary_out) *summary_out = summary;
     return current;
   }
-  // Each camera's neighbours: the cameras nearest in direction, seen from the scan's centre.
+  // Each camera's neighbours: the cameras nearest in direction, seen from the scan's centre. A
+  // pair of mutual neighbours is measured once per round, from alternating sides: the flow
+  // between the two, computed in both directions, tells the same offsets twice (issue 23: half
+  // the flow, -0.03 dB held-out PSNR on the studio default; one fixed side lost 0.08 dB).
   const Eigen::Vector3d centre = vertices.colwise().mean().transpose();
   std::vector<std::pair<int, int>> pairs;
   for (int a = 0; a < num_views; ++a) {
@@ -231,7 +234,10 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
     for (int b = 0; b < num_views; ++b)
       if (b != a) by_angle.push_back({-direction.dot((views[b].centre - centre).normalized()), b});
     std::sort(by_angle.begin(), by_angle.end());
-    for (int k = 0; k < std::min<int>(s.options.neighbours, by_angle.size()); ++k) pairs.push_back({a, by_angle[k].second});
+    for (int k = 0; k < std::min<int>(s.options.neighbours, by_angle.size()); ++k) {
+      const int b = by_angle[k].second;
+      if (std::find(pairs.begin(), pairs.end(), std::make_pair(b, a)) == pairs.end()) pairs.push_back({a, b});
+    }
   }
   const int threads = std::max(1, std::min<int>(s.options.threads, pairs.size()));
   // Calls work(0) .. work(threads - 1) concurrently.
@@ -254,8 +260,10 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
     const RowMatrixX3d face_normals = FaceNormals(mesh);
     std::vector<OffsetSums> sums(threads, OffsetSums(n));
     auto measure = [&](int part) {
-      for (std::size_t i = part; i < pairs.size(); i += threads)
-        s.MeasurePair(views[pairs[i].first], views[pairs[i].second], face_normals, &sums[part]);
+      for (std::size_t i = part; i < pairs.size(); i += threads) {
+        const auto [a, b] = round % 2 == 0 ? pairs[i] : std::make_pair(pairs[i].second, pairs[i].first);
+        s.MeasurePair(views[a], views[b], face_normals, &sums[part]);
+      }
     };
     in_parallel(draw);
     in_parallel(measure);

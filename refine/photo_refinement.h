@@ -21,7 +21,10 @@ namespace confluent {
 // Options of PhotoRefiner.
 struct PhotoRefinementOptions {
   int rounds = 5;               // flow, triangulation and move rounds per frame
-  int neighbours = 2;           // cameras compared with each camera: the nearest in direction from the scan
+  // Cameras compared with each camera: the nearest in direction from the scan. Two cameras that
+  // are each other's neighbours are compared once per round, in one camera's image in even
+  // rounds and in the other's in odd rounds.
+  int neighbours = 2;
   // Each round moves the vertices along their normals by this times the spread offsets (the
   // normalised diffusion under-steps; above 2 the rounds oscillate).
   double step_gain = 1.5;
