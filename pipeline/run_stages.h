@@ -67,15 +67,18 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
 StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& body, const BodyShape& shape,
                                    TimingLog* timings);
 
-// Confluent Motion of the scan driven by RUN/template/<frame>.ply: RUN/scan/<frame>.ply.
-StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings);
-
 // Options of the 3D-video render stage.
 struct RenderStageOptions {
   std::string view = "orbit";  // renders/<view>/
   int width = 960;
   int height = 720;
 };
+
+// Confluent Motion of the scan driven by RUN/template/<frame>.ply: RUN/scan/<frame>.ply. With
+// `render` (the render stage follows), each refined scan's 3D-video frame is drawn too while
+// the frame's images are decoded for the photo refinement, as the render stage would draw it.
+StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings,
+                           const RenderStageOptions* render = nullptr);
 
 // The 3D video: an orbit around the actor, the scan (or the template without a scan)
 // projectively textured from the used cameras, RUN/renders/orbit/<frame>.png and orbit.mp4.

@@ -1,5 +1,5 @@
-// The scan-side stages of `confluent run`: registration and correspondences, Confluent Motion,
-// and the 3D-video render.
+// The scan-side stages of `confluent run`: registration and correspondences, and Confluent Motion
+// with its refinements.
 
 #include <algorithm>
 #include <cmath>
@@ -8,17 +8,15 @@
 #include <filesystem>
 
 #include "pipeline/run_stages.h"
+#include "pipeline/orbit_frames.h"
 #include "pipeline/frame_refinement.h"
 #include "pipeline/scan_correspondence.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/mesh_io.h"
 #include "core/parallel.h"
-#include "core/video_writer.h"
 #include "deform/confluent_motion.h"
 #include "deform/correspondences.h"
-#include "render/camera_path.h"
-#include "render/projective_texture.h"
 #include "tracking/motion_io.h"
 
 namespace confluent {
@@ -62,7 +60,8 @@ StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& 
   return report;
 }
 
-StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings) {
+StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings,
+                           const RenderStageOptions* render) {
   StageReport report("deform");
   const double start = NowSeconds();
   const RunFolder& folder = inputs.folder;
@@ -132,6 +131,21 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   };
   auto read_images = [&](int frame) {
     return inputs.refine_photo ? inputs.capture->ReadFrames(used_indices, frame, inputs.threads) : std::vector<Image>();
+  };
+  // The 3D video's frames, drawn here from the photo refinement's images (the render stage would
+  // decode them again). Without a GL context the render stage is left to report it.
+  std::unique_ptr<OrbitFrames> orbit;
+  bool orbit_failed = render == nullptr;
+  int rendered = 0;
+  auto orbit_frames = [&]() -> OrbitFrames* {
+    if (!orbit && !orbit_failed) {
+      try {
+        orbit = std::make_unique<OrbitFrames>(inputs, *render, scan);
+      } catch (const RenderContextError&) {
+        orbit_failed = true;
+      }
+    }
+    return orbit.get();
   };
   // One frame on its way through the stage.
   struct FrameWork {
@@ -231,14 +245,17 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
           timings->Add("photo_refine_read", work.frame, work.images_read);
           timings->Add("photo_refine", work.frame, share * refined.photo_seconds);
         }
-        work.masks.clear();
-        work.images.clear();
       }
     }
-    for (const FrameWork& work : batch) {
+    for (FrameWork& work : batch) {
       const double write_start = NowSeconds();
       WriteMesh(folder.ScanPath(work.frame), work.animated);
       timings->Add("deform_write", work.frame, NowSeconds() - write_start);
+      if (!work.images.empty() && orbit_frames() && !fs::exists(folder.RenderPath(render->view, work.frame)))
+        orbit_frames()->Render(work.frame, work.animated.vertices.cast<float>().cast<double>(), work.images, work.masks,
+                               timings), ++rendered;
+      work.masks.clear();
+      work.images.clear();
       if (work.deform.singular) singular_frames.push_back(work.frame);
       previous = work.frame;
       ++report.computed;
@@ -260,107 +277,15 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
                   carried_frames > 0 ? "keyframes" : "frames");
     report.notes.push_back(line);
   }
+  if (rendered > 0)
+    report.notes.push_back(std::to_string(rendered) + " frame(s) of the 3D video drawn as their scans were written (" +
+                           folder.Path("renders/" + render->view) + ")");
   if (carried_frames > 0)
     report.notes.push_back(std::to_string(carried_frames) + " frame(s) between keyframes refined from the previous frame's correction");
   if (!singular_frames.empty())
     report.notes.push_back(std::to_string(singular_frames.size()) +
                            " frame(s) near a 180-degree rotation used an intermediate reference (report section 4.3), frames " +
                            std::to_string(singular_frames.front()) + " to " + std::to_string(singular_frames.back()));
-  timings->Save();
-  report.seconds = NowSeconds() - start;
-  return report;
-}
-
-namespace {
-
-// A point the orbit looks at: the centre of the used cameras' ring, at mid-body height.
-Eigen::Vector3d RingCentre(const std::vector<Camera>& cameras) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (const Camera& camera : cameras) sum += camera.center_in_world();
-  Eigen::Vector3d centre = sum / std::max<std::size_t>(1, cameras.size());
-  centre.z() = 0.95;
-  return centre;
-}
-
-}  // namespace
-
-StageReport RunRenderStage(const RunInputs& inputs, const RenderStageOptions& options, const ProgressCallback& progress,
-                           TimingLog* timings) {
-  StageReport report("render");
-  const double start = NowSeconds();
-  const RunFolder& folder = inputs.folder;
-  const Capture& capture = *inputs.capture;
-  const Rig& rig = capture.rig();
-  const bool use_scan = inputs.scan != nullptr;
-  auto geometry_path = [&](int frame) { return use_scan ? folder.ScanPath(frame) : folder.TemplatePath(frame); };
-
-  const std::vector<int> used = inputs.cameras.used();
-  const std::vector<Camera> used_cameras = inputs.cameras.UsedCameras(rig);
-  OrbitPathOptions orbit = OrbitAroundCameras(used_cameras, RingCentre(used_cameras));
-  orbit.num_frames = capture.num_frames();  // the whole capture is one turn, so shards agree
-  orbit.width_px = options.width;
-  orbit.height_px = options.height;
-  const std::vector<Camera> path = OrbitPath(orbit);
-
-  std::vector<int> todo;
-  for (int frame = inputs.frames.first; frame < inputs.frames.end; ++frame) {
-    if (fs::exists(folder.RenderPath(options.view, frame))) {
-      ++report.skipped;
-    } else if (!fs::exists(geometry_path(frame))) {
-      report.notes.push_back("missing geometry, frame not rendered: " + geometry_path(frame));
-    } else {
-      todo.push_back(frame);
-    }
-  }
-  if (!todo.empty()) {
-    // Topology and colours: the scan's own, or the posed template's.
-    ProjectiveTexturer texturer(use_scan ? *inputs.scan : ReadMesh(geometry_path(todo.front())));
-    fs::create_directories(folder.Path("renders/" + options.view));
-    int done = 0;
-    for (int frame : todo) {
-      const double frame_start = NowSeconds();
-      const Mesh mesh = ReadMesh(geometry_path(frame));
-      const std::vector<Image> images = capture.ReadFrames(used, frame, inputs.threads);
-      std::vector<Image> masks(used.size());
-      ParallelFor(static_cast<int>(used.size()), inputs.threads, [&](int i) {
-        const std::string mask_path = RunMaskPath(inputs, used[i], frame);
-        if (fs::exists(mask_path)) masks[i] = ReadMaskFile(mask_path);
-      });
-      const double render_start = NowSeconds();
-      texturer.SetFrame(mesh.vertices, used_cameras, images, masks);
-      const RenderResult result = texturer.Render(path[frame]);
-      const double write_start = NowSeconds();
-      WriteImage(folder.RenderPath(options.view, frame), result.color);
-      timings->Add("render_read", frame, render_start - frame_start);
-      timings->Add("render", frame, write_start - render_start);
-      timings->Add("render_write", frame, NowSeconds() - write_start);
-      ++report.computed;
-      ReportProgress(progress, "render", ++done, todo.size(), "frame " + std::to_string(frame));
-    }
-    timings->Save();
-  }
-  // The video over every rendered frame of the capture, in order.
-  std::vector<std::string> frames;
-  for (int frame = 0; frame < capture.num_frames(); ++frame)
-    if (fs::exists(folder.RenderPath(options.view, frame))) frames.push_back(folder.RenderPath(options.view, frame));
-  const std::string video = folder.VideoPath(options.view);
-  if (static_cast<int>(frames.size()) < capture.num_frames()) {
-    report.notes.push_back(std::to_string(capture.num_frames() - frames.size()) +
-                           " frame(s) of the capture not rendered yet: " + video + " is written once all are");
-  } else if (report.computed > 0 || !fs::exists(video)) {
-    VideoWriterOptions video_options;
-    video_options.fps = inputs.fps;
-    if (!FfmpegAvailable(video_options)) {
-      report.notes.push_back("ffmpeg not found: no " + video + " (the PNG frames are written)");
-    } else {
-      const double video_start = NowSeconds();
-      VideoWriter writer(video, options.width, options.height, video_options);
-      for (const std::string& file : frames) writer.Write(ReadImage(file));
-      writer.Close();
-      timings->Add("video", -1, NowSeconds() - video_start);
-      report.notes.push_back("video: " + video + " (" + std::to_string(frames.size()) + " frames)");
-    }
-  }
   timings->Save();
   report.seconds = NowSeconds() - start;
   return report;

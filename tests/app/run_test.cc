@@ -278,9 +278,9 @@ TEST_F(RunCommandTest, KilledInEveryStageResumesToTheUninterruptedOutputs) {
       {"scan/000001.ply", ""},
       {"scan/000004.ply", ""},
       {"scan/000008.ply", ""},
-      // render
-      {"renders/orbit/000002.png", ""},
-      {"renders/orbit/000007.png", ""},
+      // render: the deform stage draws each frame of the 3D video after its scan; killed there,
+      // the render stage of the resume draws it from the scan file
+      {"renders/orbit/000009.png", ""},
       {"renders/orbit.mp4", ""},
   };
   std::string previous_unfinished;
@@ -356,6 +356,35 @@ TEST_F(RunCommandTest, FramesRefinedSideBySideMatchShardsThatPairThemDifferently
     if (file.rfind("scan/", 0) == 0) {
       ASSERT_TRUE(actual.count(file)) << file;
       EXPECT_TRUE(actual.at(file) == bytes) << file << " differs between the whole run and the shards";
+    }
+}
+
+// The deform stage draws the 3D video's frames from the images it decoded for the photo
+// refinement; the render stage, drawing them from the scan files, draws the same pixels.
+TEST_F(RunCommandTest, VideoFramesDrawnWithTheScansEqualTheRenderStagesOwn) {
+  const auto reference = RunOutputs(ReferenceRun());
+  auto timing_rows = [](const std::string& run, const std::string& stage) {
+    std::ifstream in(run + "/timings.csv");
+    int rows = 0;
+    for (std::string line; std::getline(in, line);) rows += line.rfind(stage + ",", 0) == 0;
+    return rows;
+  };
+  EXPECT_EQ(timing_rows(ReferenceRun(), "render"), 10);
+  EXPECT_EQ(timing_rows(ReferenceRun(), "render_read"), 0) << "the reference's frames were drawn by the render stage";
+  testing::TempDir out;
+  const std::string run = out / "run";
+  fs::copy(ReferenceRun(), run, fs::copy_options::recursive);
+  fs::remove_all(run + "/renders");
+  fs::remove(run + "/timings.csv");
+  const testing::CommandResult result = RunConfluent(RunArgs(run));
+  ASSERT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
+  EXPECT_EQ(timing_rows(run, "render_read"), 10);
+  const auto redrawn = RunOutputs(run);
+  ASSERT_EQ(CountFiles(run + "/renders/orbit", ".png"), 10);
+  for (const auto& [file, bytes] : reference)
+    if (file.rfind("renders/", 0) == 0 && file != "renders/orbit.mp4") {
+      ASSERT_TRUE(redrawn.count(file)) << file;
+      EXPECT_TRUE(redrawn.at(file) == bytes) << file << " differs from the frame the deform stage drew";
     }
 }
 
