@@ -9,6 +9,7 @@
 
 #include "core/cv_interop.h"
 #include "core/error.h"
+#include "core/parallel.h"
 
 namespace confluent {
 namespace {
@@ -123,6 +124,7 @@ void VisualHullOptions::Check() const {
   RequireOption(box_half_size_m >= 0, "VisualHullOptions.box_half_size_m", box_half_size_m, ">= 0");
   RequireOption(tolerated_rejections >= 0 && tolerated_rejections <= 8, "VisualHullOptions.tolerated_rejections",
                 tolerated_rejections, "in [0, 8]");
+  RequireOption(threads >= 1, "VisualHullOptions.threads", threads, ">= 1");
 }
 
 namespace {
@@ -189,8 +191,10 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
   Grid coarse = MakeGrid(box_lower, box_upper, 48);
   const int tolerated = options.tolerated_rejections;
   const int allowed = tolerated + (leave_one_out ? 1 : 0);  // rejections a voxel of some hull may have
-  Eigen::Vector3d lower = Eigen::Vector3d::Constant(1e30), upper = Eigen::Vector3d::Constant(-1e30);
-  for (int z = 0; z < coarse.size.z(); ++z)
+  // Bounds per slice of z, then over the slices (min and max: the same in any order).
+  std::vector<Eigen::Vector3d> slice_lower(coarse.size.z(), Eigen::Vector3d::Constant(1e30));
+  std::vector<Eigen::Vector3d> slice_upper(coarse.size.z(), Eigen::Vector3d::Constant(-1e30));
+  ParallelFor(coarse.size.z(), options.threads, [&](int z) {
     for (int y = 0; y < coarse.size.y(); ++y)
       for (int x = 0; x < coarse.size.x(); ++x) {
         const Eigen::Vector3d p = coarse.Center(x, y, z);
@@ -198,10 +202,16 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
         for (int c = 0; c < n && rejections <= allowed; ++c)
           if (is_source[c] && Rejects(rig.cameras[c], masks[c], p)) ++rejections;
         if (rejections <= allowed) {
-          lower = lower.cwiseMin(p);
-          upper = upper.cwiseMax(p);
+          slice_lower[z] = slice_lower[z].cwiseMin(p);
+          slice_upper[z] = slice_upper[z].cwiseMax(p);
         }
       }
+  });
+  Eigen::Vector3d lower = Eigen::Vector3d::Constant(1e30), upper = Eigen::Vector3d::Constant(-1e30);
+  for (int z = 0; z < coarse.size.z(); ++z) {
+    lower = lower.cwiseMin(slice_lower[z]);
+    upper = upper.cwiseMax(slice_upper[z]);
+  }
   std::vector<double> ious;
   if (lower.x() > upper.x()) {  // nothing survives: every hull is empty
     for (int t : target_list) {
@@ -217,7 +227,7 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
 
   // Pass 2: per voxel, how many source cameras reject it (counted up to allowed + 1).
   std::vector<std::uint8_t> rejections(grid.count(), 0);
-  for (int z = 0; z < grid.size.z(); ++z)
+  ParallelFor(grid.size.z(), options.threads, [&](int z) {
     for (int y = 0; y < grid.size.y(); ++y)
       for (int x = 0; x < grid.size.x(); ++x) {
         const long v = grid.Index(x, y, z);
@@ -225,8 +235,12 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
         for (int c = 0; c < n && rejections[v] <= allowed; ++c)
           if (is_source[c] && Rejects(rig.cameras[c], masks[c], p)) ++rejections[v];
       }
+  });
 
-  for (int t : target_list) {
+  ious.assign(target_list.size(), 0.0);
+  std::vector<Image> hulls(target_list.size());
+  ParallelFor(static_cast<int>(target_list.size()), options.threads, [&](int target_index) {
+    const int t = target_list[target_index];
     const Camera& camera = rig.cameras[t];
     auto inside = [&](int x, int y, int z) {
       if (x < 0 || y < 0 || z < 0 || x >= grid.size.x() || y >= grid.size.y() || z >= grid.size.z()) return false;
@@ -253,9 +267,11 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
                      std::max(0, static_cast<int>(std::ceil(radius - 0.5))),
                      cv::Scalar(255), cv::FILLED);
         }
-    ious.push_back(MaskIoU(hull, masks[t]));
-    if (hull_masks) hull_masks->push_back(std::move(hull));
-  }
+    ious[target_index] = MaskIoU(hull, masks[t]);
+    hulls[target_index] = std::move(hull);
+  });
+  if (hull_masks)
+    for (Image& hull : hulls) hull_masks->push_back(std::move(hull));
   return ious;
 }
 

@@ -50,6 +50,7 @@ struct VisualHullOptions {
   // A voxel stays in a target's hull when at most this many of its source cameras reject it
   // (0: a strict hull; 1 or more: one camera's hole does not carve the others' hull).
   int tolerated_rejections = 0;
+  int threads = 1;  // the carving and the targets' projections split over this many threads (same result)
   void Check() const;
 };
 

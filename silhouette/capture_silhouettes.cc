@@ -109,7 +109,9 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
   // coarser hull does (builtin capture, 512x384, 10 cameras x 50 frames: 4.5 s without the
   // check, 12.4 s with it at 128 voxels, 7.4 s at 64).
   const bool any_correct = std::find(correct.begin(), correct.end(), true) != correct.end();
-  MultiViewOptions check_only = options.plate_free.multiview;
+  MultiViewOptions multiview = options.plate_free.multiview;
+  multiview.threads = options.threads;
+  MultiViewOptions check_only = multiview;
   check_only.grid_resolution = std::min(check_only.grid_resolution, 64);
   int start = end_frame;
   for (int c = 0; c < num_cameras; ++c) start = std::min(start, resume(c));
@@ -119,7 +121,6 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
   std::size_t done = 0, total = 0;
   for (int c = 0; c < num_cameras; ++c) total += static_cast<std::size_t>(end_frame - resume(c));
   std::vector<double> previous_fraction(num_cameras, -1.0);  // of the corrected masks
-  const MultiViewOptions& multiview = options.plate_free.multiview;
   std::vector<CameraFrameConfidence> confidences;  // of the camera-frames reaching the sink
   for (int f = start; f < end_frame; ++f) {
     std::vector<Image> images(num_cameras), masks(num_cameras);

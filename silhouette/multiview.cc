@@ -22,6 +22,7 @@ void MultiViewOptions::Check() const {
   RequireOption(hole_margin >= 0 && hole_margin <= 100, owner + "hole_margin", hole_margin, "in [0, 100]");
   RequireOption(hole_close >= 0 && hole_close <= 200, owner + "hole_close", hole_close, "in [0, 200]");
   RequireOption(min_confidence >= 0 && min_confidence <= 1, owner + "min_confidence", min_confidence, "in [0, 1]");
+  RequireOption(threads >= 1, owner + "threads", threads, ">= 1");
 }
 
 namespace {
@@ -78,6 +79,7 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   // cameras whose masks that hull explains (a shifted mask would carve it away).
   VisualHullOptions hull_options;
   hull_options.grid_resolution = options.grid_resolution;
+  hull_options.threads = options.threads;
   hull_options.tolerated_rejections =
       options.tolerated_rejections >= 0 ? options.tolerated_rejections : (with_mask - 1 >= 4 ? 1 : 0);
   std::vector<Image> projected, strict;

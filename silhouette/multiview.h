@@ -31,6 +31,7 @@ struct MultiViewOptions {
   double hole_close = 40.0;
   // A camera-frame whose confidence is below this is flagged.
   double min_confidence = 0.8;
+  int threads = 1;  // the visual hulls are carved on this many threads (the same result)
   // Throws UsageError naming the bad field.
   void Check() const;
 };
