@@ -94,10 +94,18 @@ struct SegmentFrame {
   }
 };
 
+// A segment's cross-section on top of its girth: BodyShape::depth_scale, taper_scale and
+// depth_offset.
+template <typename T>
+struct Section {
+  T depth = T(1.0), taper = T(1.0), offset = T(0.0);
+};
+
 // `skirt` (may be null): {skirt_length_m, skirt_flare_m} of BodyShape, applied to the lower torso.
 template <typename T>
 SegmentFrame<T> MakeSegmentFrame(const BodyTemplate& body, int segment, const std::array<Vec3<T>, kNumTemplateJoints>& rest,
-                                 const T* length, const T* girth, const T* skirt = nullptr) {
+                                 const T* length, const T* girth, const T* skirt = nullptr,
+                                 const Section<T>& section = Section<T>()) {
   const SegmentShape& shape = body.segments()[segment];
   SegmentFrame<T> f;
   f.a = rest[shape.joint_a] + shape.offset_a.cast<T>() * length[segment];
@@ -116,11 +124,12 @@ SegmentFrame<T> MakeSegmentFrame(const BodyTemplate& body, int segment, const st
   f.e2 = f.axis.cross(f.e1);
   const T g = girth[segment];
   f.rax = T(shape.radii_a.x()) * g;
-  f.ray = T(shape.radii_a.y()) * g;
-  f.rbx = T(shape.radii_b.x()) * g;
-  f.rby = T(shape.radii_b.y()) * g;
+  f.ray = T(shape.radii_a.y()) * g * section.depth;
+  f.rbx = T(shape.radii_b.x()) * g * section.taper;
+  f.rby = T(shape.radii_b.y()) * g * section.depth * section.taper;
   f.cap_a = T(shape.cap_a) * g;
-  f.cap_b = T(shape.cap_b) * g;
+  f.cap_b = T(shape.cap_b) * g * section.taper;
+  f.a = f.a + f.e2 * (section.offset * T(0.5) * (f.ray + f.rby));
   if (skirted) {
     f.rax = f.rax + skirt[1];
     f.ray = f.ray + skirt[1];

@@ -1,7 +1,8 @@
 #pragma once
 // The tracker's 16-segment skeletal body template (after Carranza et al. 2003): a kinematic
 // skeleton with 37 degrees of freedom and anatomical joint limits, sixteen closed tapered
-// elliptic capsules (one per BodySegment), per-segment length and girth scales, and a skirt
+// elliptic capsules (one per BodySegment), per-segment length and girth scales, cross-section
+// depth and taper along the bone, and a skirt
 // (the lower torso extended down and flared) for long skirts and dresses.
 //
 // Frame and units: world Z up, metres. At rest the template stands at the origin in an A-pose
@@ -46,12 +47,25 @@ struct JointDof {
 struct BodyShape {
   std::array<double, kNumBodySegments> length_scale;
   std::array<double, kNumBodySegments> girth_scale;
+  // Cross-sections along the bone, on top of the girth scale: the radii along e2 (front to back
+  // for the torso, head and legs) relative to those along e1, the radii at end B relative to end A
+  // (a taper), and the capsule moved along e2 by this fraction of its e2 radius (a chest in front
+  // of the spine). 1, 1 and 0: the generic template's cross-section.
+  std::array<double, kNumBodySegments> depth_scale;
+  std::array<double, kNumBodySegments> taper_scale;
+  std::array<double, kNumBodySegments> depth_offset;
   // A garment DOF for long skirts and dresses: the lower torso's capsule extends this much
   // further down along its axis, m (0 = no skirt) ...
   double skirt_length_m = 0.0;
   // ... and its radii at that lower end grow by this much, m (a cone flaring from the waist).
   double skirt_flare_m = 0.0;
-  BodyShape() { length_scale.fill(1.0); girth_scale.fill(1.0); }
+  BodyShape() {
+    length_scale.fill(1.0);
+    girth_scale.fill(1.0);
+    depth_scale.fill(1.0);
+    taper_scale.fill(1.0);
+    depth_offset.fill(0.0);
+  }
   // A uniformly scaled template of `height_m` (lengths and girths scaled alike).
   static BodyShape Uniform(double height_m);
 };

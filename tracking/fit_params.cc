@@ -24,32 +24,47 @@ void AddShapeProportionPrior(double weight, double* shape, ceres::Problem* probl
   problem->AddResidualBlock(new ceres::NormalPrior(P, Eigen::VectorXd::Zero(kShapeBlockSize)), nullptr, shape);
 }
 
-void ShapeToParams(const BodyShape& shape, double* params, double* skirt) {
+void ShapeToParams(const BodyShape& shape, double* params, double* skirt, double* section) {
   if (skirt) {
     skirt[0] = shape.skirt_length_m;
     skirt[1] = shape.skirt_flare_m;
   }
   for (int g = 0; g < kNumShapeGroups; ++g) {
-    double l = 0, gi = 0;
+    double l = 0, gi = 0, depth = 0, taper = 0, offset = 0;
     int n = 0;
     for (int s = 0; s < kNumBodySegments; ++s)
       if (kSegmentGroup[s] == g) {
         l += shape.length_scale[s];
         gi += shape.girth_scale[s];
+        depth += shape.depth_scale[s];
+        taper += shape.taper_scale[s];
+        offset += shape.depth_offset[s];
         ++n;
       }
     params[g] = l / n;
     params[kNumShapeGroups + g] = gi / n;
+    if (section) {
+      section[g] = depth / n;
+      section[kNumShapeGroups + g] = taper / n;
+      section[2 * kNumShapeGroups + g] = offset / n;
+    }
   }
 }
 
-BodyShape ParamsToShape(const double* params, const double* skirt) {
+BodyShape ParamsToShape(const double* params, const double* skirt, const double* section) {
   BodyShape shape;
   ShapeArrays(params, shape.length_scale.data(), shape.girth_scale.data());
   if (skirt) {
     shape.skirt_length_m = skirt[0];
     shape.skirt_flare_m = skirt[1];
   }
+  if (section)
+    for (int s = 0; s < kNumBodySegments; ++s) {
+      const Section<double> v = SegmentSection(section, s);
+      shape.depth_scale[s] = v.depth;
+      shape.taper_scale[s] = v.taper;
+      shape.depth_offset[s] = v.offset;
+    }
   return shape;
 }
 
@@ -81,7 +96,7 @@ std::array<SegmentWorld, kNumBodySegments> SegmentsInWorld(const BodyTemplate& b
     SegmentWorld& w = out[s];
     const int joint = body.segments()[s].joint;
     JointWorldTransform(body, joint, rest, fp.root_t, fp.root_aa, fp.root_reference, jp, &w.R, &w.P);
-    w.frame = MakeSegmentFrame(body, s, rest, length, girth, fp.skirt);
+    w.frame = MakeSegmentFrame(body, s, rest, length, girth, fp.skirt, SegmentSection(fp.section, s));
     w.a = w.P + w.R * (w.frame.a - rest[joint]);
     w.axis = w.R * w.frame.axis;
     w.e1 = w.R * w.frame.e1;

@@ -21,6 +21,9 @@ ceres::Solver::Options TemplateFitSolverOptions(int max_iterations, int num_thre
 
 // Length and girth scale per shape group.
 constexpr int kShapeBlockSize = 2 * kNumShapeGroups;
+// Cross-section depth, taper and depth offset per shape group (BodyShape::depth_scale,
+// taper_scale, depth_offset), in that order.
+constexpr int kSectionBlockSize = 3 * kNumShapeGroups;
 
 // The parameter vectors of a fit: world_from_pelvis = R(root_aa) * root_reference.
 struct FitParams {
@@ -30,7 +33,9 @@ struct FitParams {
   std::array<std::array<double, 3>, kNumTemplateJoints> dofs{};
   double shape[kShapeBlockSize] = {};
   double skirt[2] = {0.0, 0.0};  // BodyShape::skirt_length_m, skirt_flare_m (lower torso only)
+  double section[kSectionBlockSize] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};  // offsets 0
 };
+static_assert(kSectionBlockSize == 30, "FitParams::section's initialiser lists depth and taper 1, offset 0");
 
 // Adds to `problem` a prior towards human proportions on the shape block `shape`: each group's
 // length (girth) scale towards the mean of the current length (girth) scales, with `weight`.
@@ -39,10 +44,18 @@ void AddShapeProportionPrior(double weight, double* shape, ceres::Problem* probl
 
 // Per-segment length and girth scales from a shape block.
 void ShapeArrays(const double* shape, double* length, double* girth);
+// Segment `segment`'s cross-section in a section block.
+template <typename T>
+Section<T> SegmentSection(const T* block, int segment) {
+  const int g = kSegmentGroup[segment];
+  return {block[g], block[kNumShapeGroups + g], block[2 * kNumShapeGroups + g]};
+}
+// The default cross-section values of a section block's entry `i` (1, 1, 0 per kind).
+inline double DefaultSectionValue(int i) { return i < 2 * kNumShapeGroups ? 1.0 : 0.0; }
 // The shape block of `shape` (group means) and back; `skirt` (2 values, may be null) carries
-// the skirt DOFs.
-void ShapeToParams(const BodyShape& shape, double* params, double* skirt = nullptr);
-BodyShape ParamsToShape(const double* params, const double* skirt = nullptr);
+// the skirt DOFs, `section` (kSectionBlockSize values, may be null) the cross-sections.
+void ShapeToParams(const BodyShape& shape, double* params, double* skirt = nullptr, double* section = nullptr);
+BodyShape ParamsToShape(const double* params, const double* skirt = nullptr, const double* section = nullptr);
 // The pose the parameters describe, and parameters for a pose (root_aa zero, the rotation in
 // root_reference).
 TemplatePose ParamsToPose(const FitParams& fp);

@@ -6,6 +6,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "tracking/shape_json.h"
 
 namespace confluent {
 using Eigen::Vector3d;
@@ -39,13 +40,7 @@ void WritePosesJson(const std::string& path, const BodyTemplate& body, const Bod
     dofs.push_back(entry);
   }
   root["dofs"] = dofs;
-  json length, girth;
-  for (int s = 0; s < kNumBodySegments; ++s) {
-    length[BodySegmentName(s)] = shape.length_scale[s];
-    girth[BodySegmentName(s)] = shape.girth_scale[s];
-  }
-  root["shape"] = {{"length_scale", length}, {"girth_scale", girth}, {"skirt_length_m", shape.skirt_length_m},
-                   {"skirt_flare_m", shape.skirt_flare_m}};
+  root["shape"] = tracking_internal::BodyShapeJson(shape);
   json rest = json::array();
   for (const Vector3d& p : body.RestPositions(shape)) rest.push_back({p.x(), p.y(), p.z()});
   root["rest_joint_positions"] = rest;
@@ -96,13 +91,7 @@ PosesFile ReadPosesJson(const std::string& path, const BodyTemplate& body, const
   try {
     const json root = json::parse(ReadTextFile(path));
     file.fps = root.value("fps", 25.0);
-    const json& shape = root.at("shape");
-    for (int s = 0; s < kNumBodySegments; ++s) {
-      file.shape.length_scale[s] = shape.at("length_scale").at(BodySegmentName(s)).get<double>();
-      file.shape.girth_scale[s] = shape.at("girth_scale").at(BodySegmentName(s)).get<double>();
-    }
-    file.shape.skirt_length_m = shape.value("skirt_length_m", 0.0);  // absent in files without a skirt
-    file.shape.skirt_flare_m = shape.value("skirt_flare_m", 0.0);
+    file.shape = tracking_internal::ParseBodyShapeJson(root.at("shape"), path);
     for (const json& jf : root.at("frames")) {
       TrackedFrame f;
       f.frame = jf.at("frame").get<int>();

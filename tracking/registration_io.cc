@@ -6,21 +6,13 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "tracking/scan_registration.h"
+#include "tracking/shape_json.h"
 
 namespace confluent {
 
 using Eigen::Vector3d;
 
 namespace {
-
-nlohmann::json ShapeJson(const BodyShape& shape) {
-  nlohmann::json length, girth;
-  for (int s = 0; s < kNumBodySegments; ++s) {
-    length[BodySegmentName(s)] = shape.length_scale[s];
-    girth[BodySegmentName(s)] = shape.girth_scale[s];
-  }
-  return {{"length_scale", length}, {"girth_scale", girth}};
-}
 
 nlohmann::json PoseJson(const BodyTemplate& body, const TemplatePose& pose) {
   nlohmann::json out;
@@ -44,24 +36,6 @@ Vector3d Vec3(const nlohmann::json& value, const std::string& path, const std::s
     v[k] = value[k].get<double>();
   }
   return v;
-}
-
-BodyShape ParseShape(const nlohmann::json& value, const std::string& path) {
-  BodyShape shape;
-  if (!value.is_object() || !value.contains("length_scale") || !value.contains("girth_scale"))
-    throw InputError(path, "shape: expected length_scale and girth_scale");
-  for (int s = 0; s < kNumBodySegments; ++s) {
-    const std::string name = BodySegmentName(s);
-    const auto& l = value["length_scale"];
-    const auto& g = value["girth_scale"];
-    if (!l.contains(name) || !g.contains(name) || !l[name].is_number() || !g[name].is_number())
-      throw InputError(path, "shape: missing scale of segment " + name);
-    shape.length_scale[s] = l[name].get<double>();
-    shape.girth_scale[s] = g[name].get<double>();
-    if (!(shape.length_scale[s] > 0) || !(shape.girth_scale[s] > 0))
-      throw InputError(path, "shape: scales of segment " + name + " must be positive");
-  }
-  return shape;
 }
 
 TemplatePose ParsePose(const BodyTemplate& body, const nlohmann::json& value, const std::string& path) {
@@ -100,7 +74,7 @@ void WriteTemplateRegistration(const std::string& correspondences_path, const Bo
   nlohmann::json root = ReadJson(correspondences_path);
   nlohmann::json reg;
   reg["format"] = "confluent.template_registration/1";
-  reg["shape"] = ShapeJson(registration.shape);
+  reg["shape"] = tracking_internal::BodyShapeJson(registration.shape);
   reg["pose"] = PoseJson(body, registration.pose);
   reg["rms_residual"] = registration.rms_residual_m;
   reg["trimmed_rms_residual"] = registration.trimmed_rms_residual_m;
@@ -118,7 +92,7 @@ ScanRegistration ReadTemplateRegistration(const std::string& correspondences_pat
     throw InputError(correspondences_path, "no \"template_registration\" (write it with confluent correspond)");
   const auto& reg = root["template_registration"];
   ScanRegistration result;
-  result.shape = ParseShape(reg.value("shape", nlohmann::json()), correspondences_path);
+  result.shape = tracking_internal::ParseBodyShapeJson(reg.value("shape", nlohmann::json()), correspondences_path);
   result.pose = ParsePose(body, reg.value("pose", nlohmann::json()), correspondences_path);
   result.rms_residual_m = reg.value("rms_residual", 0.0);
   result.trimmed_rms_residual_m = reg.value("trimmed_rms_residual", 0.0);

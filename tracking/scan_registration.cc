@@ -110,6 +110,7 @@ struct SurfaceCost {
   std::vector<Vector3d> scan_points;            // scan samples paired with this segment
   std::vector<double> scan_weights;
   double tangential_weight = 0.3;
+  ti::Section<double> section;                  // the segment's cross-section (held constant here)
 
   int num_residuals() const { return static_cast<int>(3 * model_coords.size() + scan_points.size()); }
 
@@ -125,7 +126,9 @@ struct SurfaceCost {
     }
     std::array<ti::Vec3<T>, kNumTemplateJoints> rest;
     ti::RestPositions(*body, length, girth, &rest);
-    const ti::SegmentFrame<T> frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth);
+    const ti::SegmentFrame<T> frame =
+        ti::MakeSegmentFrame(*body, segment, rest, length, girth, static_cast<const T*>(nullptr),
+                             ti::Section<T>{T(section.depth), T(section.taper), T(section.offset)});
     const int joint = body->segments()[segment].joint;
     ti::Mat3<T> R;
     ti::Vec3<T> P;
@@ -175,7 +178,7 @@ Pairing MakePairs(const BodyTemplate& body, const FitParams& fp, const ScanSampl
                   const std::vector<int>& residual_samples, double max_distance, double min_cos, double loss_scale) {
   Pairing pairing;
   const auto segments = SegmentsInWorld(body, fp);
-  const Mesh mesh = body.PosedMesh(ParamsToShape(fp.shape), ParamsToPose(fp));
+  const Mesh mesh = body.PosedMesh(ParamsToShape(fp.shape, nullptr, fp.section), ParamsToPose(fp));
   const RowMatrixX3d normals = VertexNormals(mesh);
   const int nv = static_cast<int>(body.mesh_coords().size());
   const bool unlimited = !std::isfinite(max_distance);
@@ -265,6 +268,7 @@ void Solve(const BodyTemplate& body, Pairing* pairing, const ScanRegistrationOpt
     functor->body = &body;
     functor->root_reference = fp->root_reference;
     functor->chain_joints = chains[s];
+    functor->section = ti::SegmentSection(fp->section, s);
     auto* cost = new ceres::DynamicAutoDiffCostFunction<SurfaceCost, 16>(functor);
     const std::vector<double*> blocks = ti::AddSegmentParameterBlocks(body, chains[s], fp, cost);
     cost->SetNumResiduals(functor->num_residuals());
@@ -396,8 +400,11 @@ ScanRegistration RegisterTemplateToScan(const BodyTemplate& body, const Mesh& sc
     const Mesh generic = body.PosedMesh(BodyShape(), rest_pose);
     const double generic_height = generic.vertices.col(2).maxCoeff() - generic.vertices.col(2).minCoeff();
     shape = BodyShape::Uniform(1.75 * scan_extent / generic_height);
+    shape.depth_scale = options.initial_shape.depth_scale;
+    shape.taper_scale = options.initial_shape.taper_scale;
+    shape.depth_offset = options.initial_shape.depth_offset;
   }
-  ShapeToParams(shape, fp.shape);
+  ShapeToParams(shape, fp.shape, nullptr, fp.section);  // the cross-sections stay as given
   double scale = 0;  // scan units per template metre
   for (int s = 0; s < kNumBodySegments; ++s) scale += shape.length_scale[s] / kNumBodySegments;
   const double min_cos = std::cos(options.max_normal_angle_deg * M_PI / 180.0);
@@ -490,7 +497,7 @@ ScanRegistration RegisterTemplateToScan(const BodyTemplate& body, const Mesh& sc
     if (final_rms(turned) < final_rms(fp)) fp = turned;
   }
 
-  result.shape = ParamsToShape(fp.shape);
+  result.shape = ParamsToShape(fp.shape, nullptr, fp.section);
   result.pose = ParamsToPose(fp);
   result.scan_height = scan_extent;
   result.metres_per_unit = GuessMetresPerUnit(scan_extent);

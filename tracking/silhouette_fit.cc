@@ -35,6 +35,13 @@ void SilhouetteFitOptions::Check() const {
   RequireOption(shape_prior_weight >= 0, owner + "shape_prior_weight", shape_prior_weight, ">= 0");
   RequireOption(shape_proportion_weight >= 0, owner + "shape_proportion_weight", shape_proportion_weight, ">= 0");
   RequireOption(skirt_prior_weight >= 0, owner + "skirt_prior_weight", skirt_prior_weight, ">= 0");
+  RequireOption(section_prior_weight >= 0, owner + "section_prior_weight", section_prior_weight, ">= 0");
+  RequireOption(min_section_scale > 0 && min_section_scale <= 1, owner + "min_section_scale", min_section_scale,
+                "in (0, 1]");
+  RequireOption(max_section_scale >= 1 && max_section_scale <= 3, owner + "max_section_scale", max_section_scale,
+                "in [1, 3]");
+  RequireOption(max_depth_offset >= 0 && max_depth_offset <= 1, owner + "max_depth_offset", max_depth_offset,
+                "in [0, 1]");
   RequireOption(num_threads >= 1, owner + "num_threads", num_threads, ">= 1");
 }
 
@@ -154,7 +161,8 @@ using ti::ShapeArrays;
 
 // Residuals of one segment in one camera: model -> image samples and/or image -> model rays.
 // Parameter blocks: root translation (3), root rotation vector (3), the DOF blocks of the
-// joints on the segment's chain (root to segment joint), then the shape block (20).
+// joints on the segment's chain (root to segment joint), the shape block (20), then, when the shape is
+// fitted, the skirt block (2, lower torso only) and the section block (30).
 struct SegmentCost {
   const BodyTemplate* body = nullptr;
   const PreparedView* view = nullptr;
@@ -164,6 +172,7 @@ struct SegmentCost {
   std::vector<SurfaceCoord> samples;       // model -> image
   std::vector<int> rays;                   // image -> model: indices into view rays
   bool skirt_block = false;                // the lower torso with the skirt block (2) after the shape block
+  bool section_block = false;              // the section block (30) last
   double ray_weight = 1.0;                 // reduced px per metre at the body, times the term weight
   // Fast path when the shape is constant: rest joints, the samples relative to the segment's
   // joint, and the capsule, all precomputed in double.
@@ -172,6 +181,7 @@ struct SegmentCost {
   std::vector<Vector3d> local_samples;
   ti::SegmentFrame<double> frame_fixed;
   double skirt_fixed[2] = {0.0, 0.0};      // the skirt when it is not a parameter block
+  double section_fixed[ti::kSectionBlockSize] = {};  // the cross-sections when they are not a parameter block
 
   // Camera projection (with distortion when the camera has any) of a camera-frame point to
   // reduced pixels, then the signed distance residual.
@@ -227,7 +237,15 @@ struct SegmentCost {
       }
       ti::RestPositions(*body, length, girth, &rest);
       const T no_skirt[2] = {T(skirt_fixed[0]), T(skirt_fixed[1])};
-      frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth, skirt_block ? p[3 + chain_joints.size()] : no_skirt);
+      ti::Section<T> section;
+      if (section_block) {
+        section = ti::SegmentSection(p[3 + chain_joints.size() + (skirt_block ? 1 : 0)], segment);
+      } else {
+        const ti::Section<double> fixed = ti::SegmentSection(section_fixed, segment);
+        section = {T(fixed.depth), T(fixed.taper), T(fixed.offset)};
+      }
+      frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth, skirt_block ? p[3 + chain_joints.size()] : no_skirt,
+                                   section);
     }
     ti::Mat3<T> R;
     ti::Vec3<T> P;
@@ -363,6 +381,8 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
         functor->skirt_fixed[0] = fp->skirt[0];
         functor->skirt_fixed[1] = fp->skirt[1];
         functor->skirt_block = fit_shape && options.fit_skirt && s == int(BodySegment::kLowerTorso);
+        std::copy(fp->section, fp->section + ti::kSectionBlockSize, functor->section_fixed);
+        functor->section_block = fit_shape && options.fit_sections;
         if (!fit_shape) {
           functor->shape_constant = true;
           functor->rest_fixed = fixed_rest;
@@ -378,6 +398,10 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
         if (functor->skirt_block) {
           cost->AddParameterBlock(2);
           blocks.push_back(fp->skirt);
+        }
+        if (functor->section_block) {
+          cost->AddParameterBlock(ti::kSectionBlockSize);
+          blocks.push_back(fp->section);
         }
         cost->SetNumResiduals(num_residuals);
         ceres::LossFunction* loss = kind == 0 ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(options.model_to_image_loss_px))
@@ -419,6 +443,24 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
   } else {
     problem.SetParameterBlockConstant(fp->shape);
   }
+  if (problem.HasParameterBlock(fp->section)) {
+    // Cross-sections: a pull towards the generic template's, within plausible bodies.
+    Eigen::VectorXd generic(ti::kSectionBlockSize);
+    for (int i = 0; i < ti::kSectionBlockSize; ++i) generic[i] = ti::DefaultSectionValue(i);
+    problem.AddResidualBlock(
+        new ceres::NormalPrior(Eigen::MatrixXd::Identity(ti::kSectionBlockSize, ti::kSectionBlockSize) *
+                                   options.section_prior_weight,
+                               generic),
+        nullptr, fp->section);
+    for (int i = 0; i < ti::kSectionBlockSize; ++i) {
+      const bool offset = i >= 2 * ti::kNumShapeGroups;  // the depth offsets come last
+      const double lo = offset ? -options.max_depth_offset : options.min_section_scale;
+      const double hi = offset ? options.max_depth_offset : options.max_section_scale;
+      fp->section[i] = std::clamp(fp->section[i], lo, hi);
+      problem.SetParameterLowerBound(fp->section, i, lo);
+      problem.SetParameterUpperBound(fp->section, i, hi);
+    }
+  }
   if (problem.HasParameterBlock(fp->skirt)) {
     // A weak pull towards no skirt; the skirt reaches at most to the ground and flares at most
     // to a wide dress (both follow the body's scale).
@@ -457,7 +499,7 @@ SilhouetteFitSummary FitTemplateToSilhouettes(const BodyTemplate& body, const Si
   // Shape: one value per group (left and right share), the mean of the group's segments.
   FitParams fp;
   double shape_prior[kShapeBlockSize];
-  ti::ShapeToParams(*shape, fp.shape, fp.skirt);
+  ti::ShapeToParams(*shape, fp.shape, fp.skirt, fp.section);
   // The shape prior: the mean scale of lengths and of girths (a uniformly scaled body).
   double mean_l = 0, mean_g = 0;
   for (int g = 0; g < ti::kNumShapeGroups; ++g) {
@@ -496,7 +538,7 @@ SilhouetteFitSummary FitTemplateToSilhouettes(const BodyTemplate& body, const Si
   pose->root_translation = Vector3d(fp.root_t[0], fp.root_t[1], fp.root_t[2]);
   pose->dofs = fp.dofs;
   if (options.fit_shape) {
-    *shape = ti::ParamsToShape(fp.shape, fp.skirt);
+    *shape = ti::ParamsToShape(fp.shape, fp.skirt, fp.section);
   }
   // Residual statistics at the solution.
   {

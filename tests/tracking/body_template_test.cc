@@ -142,6 +142,42 @@ TEST(BodyTemplate, ShapeScalesLengthsAndGirths) {
   EXPECT_NEAR(v1 / v0, 1.5 * 1.5 * 1.5, 0.01);  // radii and caps scale with girth, the axis with length
 }
 
+// Cross-sections: depth scales the radii along e2 (front to back for the torso), taper the
+// radii at end B (the upper torso's shoulder end), and the offset moves the capsule along e2;
+// the joints stay where they are.
+TEST(BodyTemplate, CrossSectionsDeepenTaperAndMoveASegment) {
+  const BodyTemplate body;
+  const int chest = int(BodySegment::kUpperTorso);
+  auto extent = [&](const BodyShape& shape) {  // the upper torso's box at rest
+    const Mesh part = SegmentMesh(body.PosedMesh(shape, TemplatePose()), chest);
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = -lo;
+    for (int f = 0; f < part.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d v = part.vertices.row(part.faces(f, k)).transpose();
+        lo = lo.cwiseMin(v);
+        hi = hi.cwiseMax(v);
+      }
+    return std::make_pair(lo, hi);
+  };
+  const auto [lo0, hi0] = extent(BodyShape());
+  BodyShape deep;
+  deep.depth_scale[chest] = 1.3;
+  const auto [lo1, hi1] = extent(deep);
+  EXPECT_NEAR((hi1.y() - lo1.y()) / (hi0.y() - lo0.y()), 1.3, 0.02);  // the template faces +y
+  EXPECT_NEAR(hi1.x() - lo1.x(), hi0.x() - lo0.x(), 1e-9);
+  BodyShape moved;
+  moved.depth_offset[chest] = 0.2;
+  const auto [lo2, hi2] = extent(moved);
+  EXPECT_GT(lo2.y() - lo0.y(), 0.015);  // forwards by a fifth of its radius along y (about 2 cm)
+  EXPECT_NEAR(lo2.y() - lo0.y(), hi2.y() - hi0.y(), 1e-9);
+  BodyShape tapered;
+  tapered.taper_scale[chest] = 1.2;  // end B, at the shoulders, wider
+  const auto [lo3, hi3] = extent(tapered);
+  EXPECT_NEAR((hi3.x() - lo3.x()) / (hi0.x() - lo0.x()), 1.2, 0.03);
+  EXPECT_EQ(body.RestPositions(tapered), body.RestPositions(BodyShape()));
+  EXPECT_EQ(body.RestPositions(moved), body.RestPositions(BodyShape()));
+}
+
 TEST(BodyTemplate, ExportsPlyWithSegmentLabels) {
   const testing::TempDir dir;
   const BodyTemplate body;

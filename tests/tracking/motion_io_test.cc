@@ -4,6 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
 #include "tests/support/test_support.h"
 
 namespace confluent {
@@ -41,6 +45,60 @@ TEST(PosesJson, PerFrameFitAndTimesRoundTrip) {
   EXPECT_EQ(read.fit.mean_contour_px, frame.fit.mean_contour_px);
   EXPECT_EQ(read.fit.num_cameras, frame.fit.num_cameras);
   EXPECT_EQ(read.fit.seconds, frame.fit.seconds);
+}
+
+// The shape with its cross-sections and skirt comes back as written.
+TEST(PosesJson, ShapeWithCrossSectionsRoundTrips) {
+  const BodyTemplate body;
+  BodyShape shape = BodyShape::Uniform(1.62);
+  shape.girth_scale[int(BodySegment::kHead)] = 1.04;
+  shape.depth_scale[int(BodySegment::kUpperTorso)] = 1.21;
+  shape.taper_scale[int(BodySegment::kLowerTorso)] = 0.87;
+  shape.depth_offset[int(BodySegment::kUpperTorso)] = 0.15;
+  shape.depth_offset[int(BodySegment::kLeftShank)] = -0.05;
+  shape.skirt_length_m = 0.3;
+  shape.skirt_flare_m = 0.08;
+  testing::TempDir dir;
+  const std::string path = dir / "poses.json";
+  WritePosesJson(path, body, shape, {"a"}, {}, 25.0);
+  const BodyShape read = ReadPosesJson(path, body, {"a"}).shape;
+  EXPECT_EQ(read.length_scale, shape.length_scale);
+  EXPECT_EQ(read.girth_scale, shape.girth_scale);
+  EXPECT_EQ(read.depth_scale, shape.depth_scale);
+  EXPECT_EQ(read.taper_scale, shape.taper_scale);
+  EXPECT_EQ(read.depth_offset, shape.depth_offset);
+  EXPECT_EQ(read.skirt_length_m, shape.skirt_length_m);
+  EXPECT_EQ(read.skirt_flare_m, shape.skirt_flare_m);
+}
+
+// A poses.json written before the cross-sections existed reads with the generic ones; a bad
+// value is an error that names the file and the segment.
+TEST(PosesJson, ShapeWithoutCrossSectionsReadsAsGenericAndBadOnesAreRefused) {
+  const BodyTemplate body;
+  testing::TempDir dir;
+  const std::string path = dir / "poses.json";
+  WritePosesJson(path, body, BodyShape::Uniform(1.8), {"a"}, {}, 25.0);
+  nlohmann::json root = nlohmann::json::parse(ReadTextFile(path));
+  for (const char* key : {"depth_scale", "taper_scale", "depth_offset"}) root["shape"].erase(key);
+  WriteTextFile(path, root.dump());
+  const BodyShape old = ReadPosesJson(path, body, {"a"}).shape;
+  EXPECT_EQ(old.girth_scale, BodyShape::Uniform(1.8).girth_scale);
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    EXPECT_EQ(old.depth_scale[s], 1.0);
+    EXPECT_EQ(old.taper_scale[s], 1.0);
+    EXPECT_EQ(old.depth_offset[s], 0.0);
+  }
+  WritePosesJson(path, body, BodyShape(), {"a"}, {}, 25.0);
+  root = nlohmann::json::parse(ReadTextFile(path));
+  root["shape"]["depth_scale"]["left_thigh"] = -0.5;
+  WriteTextFile(path, root.dump());
+  try {
+    ReadPosesJson(path, body, {"a"});
+    FAIL() << "a negative depth scale was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("depth_scale of segment left_thigh"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

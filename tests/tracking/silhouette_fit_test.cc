@@ -142,6 +142,7 @@ TEST(SilhouetteFit, RecoversKnownGirthsWithoutShrinking) {
   const std::vector<Image> masks = TemplateMasks(body, truth_shape, truth, rig);  // centre-sampled
   SilhouetteFitOptions options = FullResolutionShapeFit();
   options.shape_prior_weight = 1.0;
+  options.fit_sections = false;  // girths alone: depth and taper would trade against them
   const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
   BodyShape shape = start_shape;
   TemplatePose pose = truth;
@@ -159,6 +160,54 @@ TEST(SilhouetteFit, RecoversKnownGirthsWithoutShrinking) {
     EXPECT_GT(MaskIoU(rendered, masks[c]), 0.92) << c;
     EXPECT_GT(static_cast<double>(CountForeground(rendered)) / CountForeground(masks[c]), 0.96) << c;
   }
+}
+
+// Cross-sections along the bone (issue 19, part 3): a body whose chest is deeper and lies further
+// in front of the spine, whose hips are narrower than the waist and whose thighs are deeper than
+// the generic template's. The fit from the generic cross-sections finds them, and the template
+// then covers the masks better than one fitted with girths alone.
+TEST(SilhouetteFit, RecoversKnownCrossSections) {
+  const BodyTemplate body;
+  const BodyShape start_shape = BodyShape::Uniform(1.7);
+  BodyShape truth_shape = start_shape;
+  const int chest = int(BodySegment::kUpperTorso), hips = int(BodySegment::kLowerTorso);
+  truth_shape.depth_scale[chest] = 1.25;
+  truth_shape.depth_offset[chest] = 0.2;
+  truth_shape.taper_scale[hips] = 1.2;  // the waist (end B) wider than the hips
+  for (BodySegment s : {BodySegment::kLeftThigh, BodySegment::kRightThigh})
+    truth_shape.depth_scale[int(s)] = 1.15;
+  const Rig rig = testing::CameraRing(8, 320, 240);
+  const TemplatePose truth = TruePose();
+  const std::vector<Image> masks = TemplateMasks(body, truth_shape, truth, rig);
+  SilhouetteFitOptions options = FullResolutionShapeFit();
+  options.shape_prior_weight = 1.0;
+  options.section_prior_weight = 1.0;
+  const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
+  auto fit = [&](bool sections, BodyShape* shape, TemplatePose* pose) {
+    SilhouetteFitOptions o = options;
+    o.fit_sections = sections;
+    *shape = start_shape;
+    *pose = truth;
+    FitTemplateToSilhouettes(body, observations, o, shape, pose);
+  };
+  BodyShape with, without;
+  TemplatePose pose_with, pose_without;
+  fit(true, &with, &pose_with);
+  fit(false, &without, &pose_without);
+  EXPECT_NEAR(with.depth_scale[chest], 1.25, 0.08);
+  EXPECT_NEAR(with.depth_offset[chest], 0.2, 0.08);
+  EXPECT_NEAR(with.taper_scale[hips], 1.2, 0.08);
+  EXPECT_NEAR(with.depth_scale[int(BodySegment::kLeftThigh)], 1.15, 0.08);
+  EXPECT_NEAR(with.depth_scale[int(BodySegment::kRightThigh)], 1.15, 0.08);
+  for (double v : without.depth_scale) EXPECT_EQ(v, 1.0);
+  const Mesh mesh_with = body.PosedMesh(with, pose_with), mesh_without = body.PosedMesh(without, pose_without);
+  double iou_with = 0, iou_without = 0;
+  for (std::size_t c = 0; c < rig.cameras.size(); ++c) {
+    iou_with += MaskIoU(RasterizeClosedMesh(mesh_with, rig.cameras[c]), masks[c]) / rig.size();
+    iou_without += MaskIoU(RasterizeClosedMesh(mesh_without, rig.cameras[c]), masks[c]) / rig.size();
+  }
+  EXPECT_GT(iou_with, 0.95);
+  EXPECT_GT(iou_with, iou_without + 0.01);
 }
 
 // A first frame in a deep crouch (issue 19: Indian dance starts in a plie): the visual hull is
