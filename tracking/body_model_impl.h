@@ -84,21 +84,49 @@ struct SegmentFrame {
   Vec3<T> a, axis, e1, e2;
   T length;
   T rax, ray, rbx, rby, cap_a, cap_b;
+  T bulge = T(0.0);  // the radii half-way along grow by this fraction (BodyShape::mid_bulge)
+
+  // The radii at axial fraction `f` in [0, 1]: linear from end A to end B, grown by the bulge
+  // (a parabola that is 0 at both ends).
+  void Radii(const T& f, T* rx, T* ry) const {
+    const T grow = T(1.0) + bulge * T(4.0) * f * (T(1.0) - f);
+    *rx = (rax + (rbx - rax) * f) * grow;
+    *ry = (ray + (rby - ray) * f) * grow;
+  }
 
   // The rest-pose point of surface coordinate `sc`.
   Vec3<T> Point(const SurfaceCoord& sc) const {
-    const T s(sc.s);
-    const T rx = rax + (rbx - rax) * s, ry = ray + (rby - ray) * s;
+    T rx, ry;
+    Radii(T(sc.s), &rx, &ry);
     const T cap = sc.c < 0 ? cap_a : cap_b;
-    return a + axis * (length * s + cap * T(sc.c)) + e1 * (rx * T(sc.x)) + e2 * (ry * T(sc.y));
+    return a + axis * (length * T(sc.s) + cap * T(sc.c)) + e1 * (rx * T(sc.x)) + e2 * (ry * T(sc.y));
+  }
+
+  // The same capsule in another scalar type.
+  template <typename U>
+  SegmentFrame<U> Cast() const {
+    SegmentFrame<U> f;
+    f.a = a.template cast<U>();
+    f.axis = axis.template cast<U>();
+    f.e1 = e1.template cast<U>();
+    f.e2 = e2.template cast<U>();
+    f.length = U(length);
+    f.rax = U(rax);
+    f.ray = U(ray);
+    f.rbx = U(rbx);
+    f.rby = U(rby);
+    f.cap_a = U(cap_a);
+    f.cap_b = U(cap_b);
+    f.bulge = U(bulge);
+    return f;
   }
 };
 
-// A segment's cross-section on top of its girth: BodyShape::depth_scale, taper_scale and
-// depth_offset.
+// A segment's cross-section on top of its girth: BodyShape::depth_scale, taper_scale,
+// depth_offset (the torso's only) and mid_bulge (not the lower torso's).
 template <typename T>
 struct Section {
-  T depth = T(1.0), taper = T(1.0), offset = T(0.0);
+  T depth = T(1.0), taper = T(1.0), offset = T(0.0), bulge = T(0.0);
 };
 
 // `skirt` (may be null): {skirt_length_m, skirt_flare_m} of BodyShape, applied to the lower torso.
@@ -129,7 +157,12 @@ SegmentFrame<T> MakeSegmentFrame(const BodyTemplate& body, int segment, const st
   f.rby = T(shape.radii_b.y()) * g * section.depth * section.taper;
   f.cap_a = T(shape.cap_a) * g;
   f.cap_b = T(shape.cap_b) * g * section.taper;
-  f.a = f.a + f.e2 * (section.offset * T(0.5) * (f.ray + f.rby));
+  // The lower torso's profile below the waist is the skirt's (a bulge there would stand in for a
+  // skirt and keep the skirt from being found).
+  if (segment != int(BodySegment::kLowerTorso)) f.bulge = section.bulge;
+  // The spine lies behind the torso's middle; a limb's axis runs through its joints.
+  if (segment == int(BodySegment::kUpperTorso) || segment == int(BodySegment::kLowerTorso))
+    f.a = f.a + f.e2 * (section.offset * T(0.5) * (f.ray + f.rby));
   if (skirted) {
     f.rax = f.rax + skirt[1];
     f.ray = f.ray + skirt[1];

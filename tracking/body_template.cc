@@ -220,7 +220,8 @@ Mesh BodyTemplate::PosedMesh(const BodyShape& shape, const TemplatePose& pose) c
   mesh.face_labels.resize(nf * kNumBodySegments);
   for (int s = 0; s < kNumBodySegments; ++s) {
     const double skirt[2] = {shape.skirt_length_m, shape.skirt_flare_m};
-    const ti::Section<double> section{shape.depth_scale[s], shape.taper_scale[s], shape.depth_offset[s]};
+    const ti::Section<double> section{shape.depth_scale[s], shape.taper_scale[s], shape.depth_offset[s],
+                                      shape.mid_bulge[s]};
     const auto frame = ti::MakeSegmentFrame<double>(*this, s, rest, shape.length_scale.data(), shape.girth_scale.data(),
                                                     skirt, section);
     const int j = segments_[s].joint;

@@ -49,11 +49,15 @@ struct BodyShape {
   std::array<double, kNumBodySegments> girth_scale;
   // Cross-sections along the bone, on top of the girth scale: the radii along e2 (front to back
   // for the torso, head and legs) relative to those along e1, the radii at end B relative to end A
-  // (a taper), and the capsule moved along e2 by this fraction of its e2 radius (a chest in front
-  // of the spine). 1, 1 and 0: the generic template's cross-section.
+  // (a taper), and, for the upper and lower torso only, the capsule moved along e2 by this
+  // fraction of its e2 radius (a chest in front of the spine; a limb's axis stays on its bones).
+  // Last, the radii half-way along the bone grow by mid_bulge (a parabola, 0 at the ends: a
+  // chest, a calf; not the lower torso, whose profile is the skirt's). 1, 1, 0 and 0: the generic
+  // template's cross-section.
   std::array<double, kNumBodySegments> depth_scale;
   std::array<double, kNumBodySegments> taper_scale;
   std::array<double, kNumBodySegments> depth_offset;
+  std::array<double, kNumBodySegments> mid_bulge;
   // A garment DOF for long skirts and dresses: the lower torso's capsule extends this much
   // further down along its axis, m (0 = no skirt) ...
   double skirt_length_m = 0.0;
@@ -65,6 +69,7 @@ struct BodyShape {
     depth_scale.fill(1.0);
     taper_scale.fill(1.0);
     depth_offset.fill(0.0);
+    mid_bulge.fill(0.0);
   }
   // A uniformly scaled template of `height_m` (lengths and girths scaled alike).
   static BodyShape Uniform(double height_m);

@@ -30,7 +30,7 @@ void ShapeToParams(const BodyShape& shape, double* params, double* skirt, double
     skirt[1] = shape.skirt_flare_m;
   }
   for (int g = 0; g < kNumShapeGroups; ++g) {
-    double l = 0, gi = 0, depth = 0, taper = 0, offset = 0;
+    double l = 0, gi = 0, depth = 0, taper = 0, offset = 0, bulge = 0;
     int n = 0;
     for (int s = 0; s < kNumBodySegments; ++s)
       if (kSegmentGroup[s] == g) {
@@ -39,6 +39,7 @@ void ShapeToParams(const BodyShape& shape, double* params, double* skirt, double
         depth += shape.depth_scale[s];
         taper += shape.taper_scale[s];
         offset += shape.depth_offset[s];
+        bulge += shape.mid_bulge[s];
         ++n;
       }
     params[g] = l / n;
@@ -47,6 +48,7 @@ void ShapeToParams(const BodyShape& shape, double* params, double* skirt, double
       section[g] = depth / n;
       section[kNumShapeGroups + g] = taper / n;
       section[2 * kNumShapeGroups + g] = offset / n;
+      section[3 * kNumShapeGroups + g] = bulge / n;
     }
   }
 }
@@ -64,6 +66,7 @@ BodyShape ParamsToShape(const double* params, const double* skirt, const double*
       shape.depth_scale[s] = v.depth;
       shape.taper_scale[s] = v.taper;
       shape.depth_offset[s] = v.offset;
+      shape.mid_bulge[s] = v.bulge;
     }
   return shape;
 }

@@ -21,9 +21,9 @@ ceres::Solver::Options TemplateFitSolverOptions(int max_iterations, int num_thre
 
 // Length and girth scale per shape group.
 constexpr int kShapeBlockSize = 2 * kNumShapeGroups;
-// Cross-section depth, taper and depth offset per shape group (BodyShape::depth_scale,
-// taper_scale, depth_offset), in that order.
-constexpr int kSectionBlockSize = 3 * kNumShapeGroups;
+// Cross-section depth, taper, depth offset and bulge per shape group (BodyShape::depth_scale,
+// taper_scale, depth_offset, mid_bulge), in that order.
+constexpr int kSectionBlockSize = 4 * kNumShapeGroups;
 
 // The parameter vectors of a fit: world_from_pelvis = R(root_aa) * root_reference.
 struct FitParams {
@@ -33,9 +33,9 @@ struct FitParams {
   std::array<std::array<double, 3>, kNumTemplateJoints> dofs{};
   double shape[kShapeBlockSize] = {};
   double skirt[2] = {0.0, 0.0};  // BodyShape::skirt_length_m, skirt_flare_m (lower torso only)
-  double section[kSectionBlockSize] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};  // offsets 0
+  double section[kSectionBlockSize] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};  // offsets, bulges 0
 };
-static_assert(kSectionBlockSize == 30, "FitParams::section's initialiser lists depth and taper 1, offset 0");
+static_assert(kSectionBlockSize == 40, "FitParams::section's initialiser lists depth and taper 1, the rest 0");
 
 // Adds to `problem` a prior towards human proportions on the shape block `shape`: each group's
 // length (girth) scale towards the mean of the current length (girth) scales, with `weight`.
@@ -48,9 +48,9 @@ void ShapeArrays(const double* shape, double* length, double* girth);
 template <typename T>
 Section<T> SegmentSection(const T* block, int segment) {
   const int g = kSegmentGroup[segment];
-  return {block[g], block[kNumShapeGroups + g], block[2 * kNumShapeGroups + g]};
+  return {block[g], block[kNumShapeGroups + g], block[2 * kNumShapeGroups + g], block[3 * kNumShapeGroups + g]};
 }
-// The default cross-section values of a section block's entry `i` (1, 1, 0 per kind).
+// The default cross-section values of a section block's entry `i` (1, 1, 0, 0 per kind).
 inline double DefaultSectionValue(int i) { return i < 2 * kNumShapeGroups ? 1.0 : 0.0; }
 // The shape block of `shape` (group means) and back; `skirt` (2 values, may be null) carries
 // the skirt DOFs, `section` (kSectionBlockSize values, may be null) the cross-sections.

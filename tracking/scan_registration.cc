@@ -80,7 +80,8 @@ T CapsuleDistance(const ti::SegmentFrame<T>& f, const ti::Vec3<T>& a, const ti::
   if (s < T(0.0)) s = T(0.0);
   if (s > f.length) s = f.length;
   const T frac = s / f.length;
-  const T rx = f.rax + (f.rbx - f.rax) * frac, ry = f.ray + (f.rby - f.ray) * frac;
+  T rx, ry;
+  f.Radii(frac, &rx, &ry);
   const T over = oz - s;
   const T cap = over < T(0.0) ? f.cap_a : f.cap_b;
   const T qx = ox / rx, qy = oy / ry, qz = over / cap;
@@ -128,7 +129,7 @@ struct SurfaceCost {
     ti::RestPositions(*body, length, girth, &rest);
     const ti::SegmentFrame<T> frame =
         ti::MakeSegmentFrame(*body, segment, rest, length, girth, static_cast<const T*>(nullptr),
-                             ti::Section<T>{T(section.depth), T(section.taper), T(section.offset)});
+                             ti::Section<T>{T(section.depth), T(section.taper), T(section.offset), T(section.bulge)});
     const int joint = body->segments()[segment].joint;
     ti::Mat3<T> R;
     ti::Vec3<T> P;
@@ -403,6 +404,7 @@ ScanRegistration RegisterTemplateToScan(const BodyTemplate& body, const Mesh& sc
     shape.depth_scale = options.initial_shape.depth_scale;
     shape.taper_scale = options.initial_shape.taper_scale;
     shape.depth_offset = options.initial_shape.depth_offset;
+    shape.mid_bulge = options.initial_shape.mid_bulge;
   }
   ShapeToParams(shape, fp.shape, nullptr, fp.section);  // the cross-sections stay as given
   double scale = 0;  // scan units per template metre

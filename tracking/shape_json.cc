@@ -42,7 +42,7 @@ void ParseScales(const nlohmann::json& value, const std::string& key, bool requi
 nlohmann::json BodyShapeJson(const BodyShape& shape) {
   return {{"length_scale", ScalesJson(shape.length_scale)}, {"girth_scale", ScalesJson(shape.girth_scale)},
           {"depth_scale", ScalesJson(shape.depth_scale)},   {"taper_scale", ScalesJson(shape.taper_scale)},
-          {"depth_offset", ScalesJson(shape.depth_offset)},
+          {"depth_offset", ScalesJson(shape.depth_offset)}, {"mid_bulge", ScalesJson(shape.mid_bulge)},
           {"skirt_length_m", shape.skirt_length_m},         {"skirt_flare_m", shape.skirt_flare_m}};
 }
 
@@ -55,6 +55,7 @@ BodyShape ParseBodyShapeJson(const nlohmann::json& value, const std::string& pat
   ParseScales(value, "depth_scale", false, 0, big, path, &shape.depth_scale);
   ParseScales(value, "taper_scale", false, 0, big, path, &shape.taper_scale);
   ParseScales(value, "depth_offset", false, -1, 1, path, &shape.depth_offset);
+  ParseScales(value, "mid_bulge", false, -1, 1, path, &shape.mid_bulge);
   for (const char* key : {"skirt_length_m", "skirt_flare_m"}) {
     if (!value.contains(key)) continue;
     if (!value[key].is_number() || !(value[key].get<double>() >= 0))

@@ -42,6 +42,7 @@ void SilhouetteFitOptions::Check() const {
                 "in [1, 3]");
   RequireOption(max_depth_offset >= 0 && max_depth_offset <= 1, owner + "max_depth_offset", max_depth_offset,
                 "in [0, 1]");
+  RequireOption(max_mid_bulge >= 0 && max_mid_bulge <= 1, owner + "max_mid_bulge", max_mid_bulge, "in [0, 1]");
   RequireOption(num_threads >= 1, owner + "num_threads", num_threads, ">= 1");
 }
 
@@ -162,7 +163,7 @@ using ti::ShapeArrays;
 // Residuals of one segment in one camera: model -> image samples and/or image -> model rays.
 // Parameter blocks: root translation (3), root rotation vector (3), the DOF blocks of the
 // joints on the segment's chain (root to segment joint), the shape block (20), then, when the shape is
-// fitted, the skirt block (2, lower torso only) and the section block (30).
+// fitted, the skirt block (2, lower torso only) and the section block (40).
 struct SegmentCost {
   const BodyTemplate* body = nullptr;
   const PreparedView* view = nullptr;
@@ -172,7 +173,7 @@ struct SegmentCost {
   std::vector<SurfaceCoord> samples;       // model -> image
   std::vector<int> rays;                   // image -> model: indices into view rays
   bool skirt_block = false;                // the lower torso with the skirt block (2) after the shape block
-  bool section_block = false;              // the section block (30) last
+  bool section_block = false;              // the section block (40) last
   double ray_weight = 1.0;                 // reduced px per metre at the body, times the term weight
   // Fast path when the shape is constant: rest joints, the samples relative to the segment's
   // joint, and the capsule, all precomputed in double.
@@ -217,17 +218,7 @@ struct SegmentCost {
     ti::SegmentFrame<T> frame;
     if (shape_constant) {
       for (int j = 0; j < kNumTemplateJoints; ++j) rest[j] = rest_fixed[j].cast<T>();
-      frame.a = frame_fixed.a.cast<T>();
-      frame.axis = frame_fixed.axis.cast<T>();
-      frame.e1 = frame_fixed.e1.cast<T>();
-      frame.e2 = frame_fixed.e2.cast<T>();
-      frame.length = T(frame_fixed.length);
-      frame.rax = T(frame_fixed.rax);
-      frame.ray = T(frame_fixed.ray);
-      frame.rbx = T(frame_fixed.rbx);
-      frame.rby = T(frame_fixed.rby);
-      frame.cap_a = T(frame_fixed.cap_a);
-      frame.cap_b = T(frame_fixed.cap_b);
+      frame = frame_fixed.Cast<T>();
     } else {
       const T* shape = p[2 + chain_joints.size()];
       T length[kNumBodySegments], girth[kNumBodySegments];
@@ -242,7 +233,7 @@ struct SegmentCost {
         section = ti::SegmentSection(p[3 + chain_joints.size() + (skirt_block ? 1 : 0)], segment);
       } else {
         const ti::Section<double> fixed = ti::SegmentSection(section_fixed, segment);
-        section = {T(fixed.depth), T(fixed.taper), T(fixed.offset)};
+        section = {T(fixed.depth), T(fixed.taper), T(fixed.offset), T(fixed.bulge)};
       }
       frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth, skirt_block ? p[3 + chain_joints.size()] : no_skirt,
                                    section);
@@ -281,7 +272,8 @@ struct SegmentCost {
         if (s < T(0.0)) { s = T(0.0); clamped = true; }
         if (s > frame.length) { s = frame.length; clamped = true; }
         const T f = s / frame.length;
-        const T rx = frame.rax + (frame.rbx - frame.rax) * f, ry = frame.ray + (frame.rby - frame.ray) * f;
+        T rx, ry;
+        frame.Radii(f, &rx, &ry);
         const T qz0 = oz - s;
         const T inv_cap = clamped ? T(1.0) / (qz0 < T(0.0) ? frame.cap_a : frame.cap_b) : T(0.0);
         const ti::Vec3<T> av(ox / rx, oy / ry, qz0 * inv_cap), bv(dx / rx, dy / ry, dz * inv_cap);
@@ -308,7 +300,8 @@ double RayCapsuleDistance(const ti::SegmentFrame<double>& frame, const Vector3d&
   if (s < 0) { s = 0; clamped = true; }
   if (s > frame.length) { s = frame.length; clamped = true; }
   const double f = s / frame.length;
-  const double rx = frame.rax + (frame.rbx - frame.rax) * f, ry = frame.ray + (frame.rby - frame.ray) * f;
+  double rx, ry;
+  frame.Radii(f, &rx, &ry);
   const double qz0 = oz - s;
   const double inv_cap = clamped ? 1.0 / (qz0 < 0 ? frame.cap_a : frame.cap_b) : 0.0;
   const Vector3d av(ox / rx, oy / ry, qz0 * inv_cap), bv(dx / rx, dy / ry, dz * inv_cap);
@@ -453,9 +446,9 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
                                generic),
         nullptr, fp->section);
     for (int i = 0; i < ti::kSectionBlockSize; ++i) {
-      const bool offset = i >= 2 * ti::kNumShapeGroups;  // the depth offsets come last
-      const double lo = offset ? -options.max_depth_offset : options.min_section_scale;
-      const double hi = offset ? options.max_depth_offset : options.max_section_scale;
+      const int kind = i / ti::kNumShapeGroups;  // depth, taper, offset, bulge
+      const double lo = kind == 2 ? -options.max_depth_offset : kind == 3 ? -options.max_mid_bulge : options.min_section_scale;
+      const double hi = kind == 2 ? options.max_depth_offset : kind == 3 ? options.max_mid_bulge : options.max_section_scale;
       fp->section[i] = std::clamp(fp->section[i], lo, hi);
       problem.SetParameterLowerBound(fp->section, i, lo);
       problem.SetParameterUpperBound(fp->section, i, hi);

@@ -42,14 +42,16 @@ struct SilhouetteFitOptions {
   double shape_proportion_weight = 0.0;
   bool fit_skirt = true;           // with fit_shape: also optimise BodyShape's skirt length and flare
   double skirt_prior_weight = 2.0; // weight (per metre) of the prior towards no skirt
-  // With fit_shape: also optimise the cross-sections (BodyShape::depth_scale, taper_scale and
-  // depth_offset per group), pulled towards the generic template's (1, 1, 0) with this weight,
-  // scales within [min_section_scale, max_section_scale], offsets within +-max_depth_offset.
+  // With fit_shape: also optimise the cross-sections (BodyShape::depth_scale, taper_scale,
+  // depth_offset and mid_bulge per group), pulled towards the generic template's (1, 1, 0, 0) with
+  // this weight, scales within [min_section_scale, max_section_scale], offsets within
+  // +-max_depth_offset, bulges within +-max_mid_bulge.
   bool fit_sections = true;
   double section_prior_weight = 20.0;
   double min_section_scale = 0.7;
   double max_section_scale = 1.5;
   double max_depth_offset = 0.4;
+  double max_mid_bulge = 0.3;
   int num_threads = 2;
   // Throws UsageError for out-of-range values.
   void Check() const;

@@ -143,8 +143,8 @@ TEST(BodyTemplate, ShapeScalesLengthsAndGirths) {
 }
 
 // Cross-sections: depth scales the radii along e2 (front to back for the torso), taper the
-// radii at end B (the upper torso's shoulder end), and the offset moves the capsule along e2;
-// the joints stay where they are.
+// radii at end B (the upper torso's shoulder end), the offset moves the capsule along e2 and the
+// bulge widens its middle; the joints stay where they are. A limb's axis stays on its bones.
 TEST(BodyTemplate, CrossSectionsDeepenTaperAndMoveASegment) {
   const BodyTemplate body;
   const int chest = int(BodySegment::kUpperTorso);
@@ -176,6 +176,34 @@ TEST(BodyTemplate, CrossSectionsDeepenTaperAndMoveASegment) {
   EXPECT_NEAR((hi3.x() - lo3.x()) / (hi0.x() - lo0.x()), 1.2, 0.03);
   EXPECT_EQ(body.RestPositions(tapered), body.RestPositions(BodyShape()));
   EXPECT_EQ(body.RestPositions(moved), body.RestPositions(BodyShape()));
+  // The bulge: the middle ring (s = 0.5) of the shank grows by the bulge, its ends do not.
+  const int shank = int(BodySegment::kLeftShank);
+  BodyShape calf;
+  calf.mid_bulge[shank] = 0.25;
+  calf.depth_offset[shank] = 0.3;  // ignored: not a torso segment
+  const Mesh plain = body.PosedMesh(BodyShape(), TemplatePose()), bulged = body.PosedMesh(calf, TemplatePose());
+  const int nv = static_cast<int>(body.mesh_coords().size());
+  const Eigen::Vector3d knee = body.RestPositions(BodyShape())[kJointLeftKnee];
+  const Eigen::Vector3d ankle = body.RestPositions(BodyShape())[kJointLeftAnkle];
+  const Eigen::Vector3d axis = (ankle - knee).normalized();
+  auto radial = [&](const Mesh& m, int v) {  // distance from the knee-ankle line
+    const Eigen::Vector3d p = m.vertices.row(shank * nv + v).transpose() - knee;
+    return (p - axis * axis.dot(p)).norm();
+  };
+  int middle = 0, ends = 0;
+  for (int v = 0; v < nv; ++v) {
+    const SurfaceCoord& sc = body.mesh_coords()[v];
+    if (sc.c != 0.0) continue;
+    if (sc.s == 0.5) {
+      EXPECT_NEAR(radial(bulged, v) / radial(plain, v), 1.25, 1e-6);
+      ++middle;
+    } else if (sc.s == 0.0 || sc.s == 1.0) {
+      EXPECT_NEAR(radial(bulged, v), radial(plain, v), 1e-9);
+      ++ends;
+    }
+  }
+  EXPECT_GT(middle, 0);
+  EXPECT_GT(ends, 0);
 }
 
 TEST(BodyTemplate, ExportsPlyWithSegmentLabels) {

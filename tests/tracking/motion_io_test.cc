@@ -55,7 +55,8 @@ TEST(PosesJson, ShapeWithCrossSectionsRoundTrips) {
   shape.depth_scale[int(BodySegment::kUpperTorso)] = 1.21;
   shape.taper_scale[int(BodySegment::kLowerTorso)] = 0.87;
   shape.depth_offset[int(BodySegment::kUpperTorso)] = 0.15;
-  shape.depth_offset[int(BodySegment::kLeftShank)] = -0.05;
+  shape.depth_offset[int(BodySegment::kLowerTorso)] = -0.05;
+  shape.mid_bulge[int(BodySegment::kLeftShank)] = 0.12;
   shape.skirt_length_m = 0.3;
   shape.skirt_flare_m = 0.08;
   testing::TempDir dir;
@@ -67,6 +68,7 @@ TEST(PosesJson, ShapeWithCrossSectionsRoundTrips) {
   EXPECT_EQ(read.depth_scale, shape.depth_scale);
   EXPECT_EQ(read.taper_scale, shape.taper_scale);
   EXPECT_EQ(read.depth_offset, shape.depth_offset);
+  EXPECT_EQ(read.mid_bulge, shape.mid_bulge);
   EXPECT_EQ(read.skirt_length_m, shape.skirt_length_m);
   EXPECT_EQ(read.skirt_flare_m, shape.skirt_flare_m);
 }
@@ -79,7 +81,7 @@ TEST(PosesJson, ShapeWithoutCrossSectionsReadsAsGenericAndBadOnesAreRefused) {
   const std::string path = dir / "poses.json";
   WritePosesJson(path, body, BodyShape::Uniform(1.8), {"a"}, {}, 25.0);
   nlohmann::json root = nlohmann::json::parse(ReadTextFile(path));
-  for (const char* key : {"depth_scale", "taper_scale", "depth_offset"}) root["shape"].erase(key);
+  for (const char* key : {"depth_scale", "taper_scale", "depth_offset", "mid_bulge"}) root["shape"].erase(key);
   WriteTextFile(path, root.dump());
   const BodyShape old = ReadPosesJson(path, body, {"a"}).shape;
   EXPECT_EQ(old.girth_scale, BodyShape::Uniform(1.8).girth_scale);
@@ -87,6 +89,7 @@ TEST(PosesJson, ShapeWithoutCrossSectionsReadsAsGenericAndBadOnesAreRefused) {
     EXPECT_EQ(old.depth_scale[s], 1.0);
     EXPECT_EQ(old.taper_scale[s], 1.0);
     EXPECT_EQ(old.depth_offset[s], 0.0);
+    EXPECT_EQ(old.mid_bulge[s], 0.0);
   }
   WritePosesJson(path, body, BodyShape(), {"a"}, {}, 25.0);
   root = nlohmann::json::parse(ReadTextFile(path));

@@ -163,8 +163,8 @@ TEST(SilhouetteFit, RecoversKnownGirthsWithoutShrinking) {
 }
 
 // Cross-sections along the bone (issue 19, part 3): a body whose chest is deeper and lies further
-// in front of the spine, whose hips are narrower than the waist and whose thighs are deeper than
-// the generic template's. The fit from the generic cross-sections finds them, and the template
+// in front of the spine, whose hips are narrower than the waist, whose thighs are deeper and whose
+// upper arms bulge more than the generic template's. The fit from the generic cross-sections finds them, and the template
 // then covers the masks better than one fitted with girths alone.
 TEST(SilhouetteFit, RecoversKnownCrossSections) {
   const BodyTemplate body;
@@ -174,8 +174,8 @@ TEST(SilhouetteFit, RecoversKnownCrossSections) {
   truth_shape.depth_scale[chest] = 1.25;
   truth_shape.depth_offset[chest] = 0.2;
   truth_shape.taper_scale[hips] = 1.2;  // the waist (end B) wider than the hips
-  for (BodySegment s : {BodySegment::kLeftThigh, BodySegment::kRightThigh})
-    truth_shape.depth_scale[int(s)] = 1.15;
+  for (BodySegment s : {BodySegment::kLeftThigh, BodySegment::kRightThigh}) truth_shape.depth_scale[int(s)] = 1.15;
+  for (BodySegment s : {BodySegment::kLeftUpperArm, BodySegment::kRightUpperArm}) truth_shape.mid_bulge[int(s)] = 0.2;
   const Rig rig = testing::CameraRing(8, 320, 240);
   const TemplatePose truth = TruePose();
   const std::vector<Image> masks = TemplateMasks(body, truth_shape, truth, rig);
@@ -199,6 +199,7 @@ TEST(SilhouetteFit, RecoversKnownCrossSections) {
   EXPECT_NEAR(with.taper_scale[hips], 1.2, 0.08);
   EXPECT_NEAR(with.depth_scale[int(BodySegment::kLeftThigh)], 1.15, 0.08);
   EXPECT_NEAR(with.depth_scale[int(BodySegment::kRightThigh)], 1.15, 0.08);
+  EXPECT_NEAR(with.mid_bulge[int(BodySegment::kLeftUpperArm)], 0.2, 0.08);
   for (double v : without.depth_scale) EXPECT_EQ(v, 1.0);
   const Mesh mesh_with = body.PosedMesh(with, pose_with), mesh_without = body.PosedMesh(without, pose_without);
   double iou_with = 0, iou_without = 0;
