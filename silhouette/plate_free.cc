@@ -114,6 +114,28 @@ class ColourPrior {
   double actor_total_ = 0, background_total_ = 0;
 };
 
+// The background estimate for one round: `first_estimate` inpainted over the pixels that
+// `occupied` leaves with fewer than 2 free samples (which take the estimate's colour). Outside
+// the first estimate's "ever changed" envelope that estimate is the temporal median, which where
+// the actor stood still is the actor: the surrounding background is the better guess.
+Image InpaintNeverFree(const Image& first_estimate, const std::vector<Image>& occupied) {
+  const std::size_t pixels = static_cast<std::size_t>(first_estimate.width) * first_estimate.height;
+  cv::Mat never_free = cv::Mat::zeros(first_estimate.height, first_estimate.width, CV_8U);
+  bool any = false;
+  for (std::size_t i = 0; i < pixels; ++i) {
+    int free = 0;
+    for (std::size_t k = 0; k < occupied.size() && free < 2; ++k) free += occupied[k].data[i] == 0;
+    if (free < 2) never_free.data[i] = 255, any = true;
+  }
+  if (!any) return first_estimate;
+  // Grown a little, so that the fill starts from the background around them and not from
+  // their own rim.
+  cv::dilate(never_free, never_free, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
+  cv::Mat filled;
+  cv::inpaint(AsCvMat(first_estimate), never_free, filled, 5.0, cv::INPAINT_TELEA);
+  return ImageFromCvMat(filled);
+}
+
 }  // namespace
 
 std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const std::vector<std::vector<Image>>& frames,
@@ -151,12 +173,17 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
       std::vector<Image> masks(n);
       for (int c = 0; c < n; ++c)
         if (!frames[c].empty() && !models[c].empty()) masks[c] = CleanMask(models[c].Classify(frames[c][k]), cleanup);
-      std::vector<Image> hulls;
-      const std::vector<ViewConsistency> views = CheckMultiView(rig, &masks, learn, options.multiview, &hulls);
+      std::vector<Image> hulls, strict_hulls;
+      const std::vector<ViewConsistency> views =
+          CheckMultiView(rig, &masks, learn, options.multiview, &hulls, &strict_hulls);
       for (int c = 0; c < n; ++c) {
         if (!learn[c]) continue;
+        // The strict hull counts too: it leaves out the cameras whose masks it does not explain,
+        // so it keeps a still actor (a head, a torso) that several cameras' masks miss, which the
+        // tolerant hull loses.
         cv::Mat occupancy = AsCvMat(masks[c]).clone();
         if (!hulls[c].empty()) cv::bitwise_or(occupancy, AsCvMat(hulls[c]), occupancy);
+        if (!strict_hulls[c].empty()) cv::bitwise_or(occupancy, AsCvMat(strict_hulls[c]), occupancy);
         occupied[c].push_back(ImageFromCvMat(Grow(occupancy, options.occupancy_margin)));
         // Colour samples: the actor where the mask and the hull agree (eroded), the background
         // well away from both.
@@ -180,7 +207,8 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
           if (p >= options.background_colour) occupied[c][k].data[i] = 0;
           else if (p <= 1.0 - options.background_colour) occupied[c][k].data[i] = 255;
         }
-      models[c] = Learn(frames[c], occupied[c], estimate[c], background, rig.cameras[c].name);
+      models[c] = Learn(frames[c], occupied[c], InpaintNeverFree(estimate[c], occupied[c]), background,
+                        rig.cameras[c].name);
     }
   }
   if (notes != nullptr)

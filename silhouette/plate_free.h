@@ -1,9 +1,10 @@
 #pragma once
 // Backgrounds learned from the video itself when there is no clean plate, for every camera of a
 // calibrated rig together: per-pixel statistics over the frames where the pixel is free, the
-// occupancy coming from the masks and from the visual hull of the other cameras, iterated.
+// occupancy coming from the masks and from the visual hulls of the other cameras, iterated.
 // Robust to an actor who stays in place: where the temporal median holds the actor, the first
-// estimate is the surrounding background filled in (inpainted) and the samples nearest to it.
+// estimate is the surrounding background filled in (inpainted) and the samples nearest to it;
+// a pixel that the occupancy never leaves free takes the background inpainted around it.
 
 #include <string>
 #include <vector>
@@ -20,8 +21,8 @@ namespace confluent {
 struct PlateFreeOptions {
   // Rounds of masks -> multi-view correction -> occupancy -> background.
   int iterations = 2;
-  // Occupancy is the corrected mask and the others' hull, grown by this margin (per 1000 pixels
-  // of image width).
+  // Occupancy is the corrected mask and the others' hulls (tolerant and strict), grown by this
+  // margin (per 1000 pixels of image width).
   double occupancy_margin = 10.0;
   // A pixel the actor may cover (its samples differ from the median) takes the samples within
   // this many noise sigmas (plus 4% of the colour's brightness) of the nearest sample to the

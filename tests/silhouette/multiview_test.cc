@@ -226,10 +226,11 @@ TEST(PlateFree, ActorStandingStillForHalfTheVideoIsFoundWithoutAPlate) {
   std::printf("temporal median: IoU mean %.3f worst %.3f; plate-free multi-view: mean %.3f worst %.3f\n", median_mean,
               median_worst, mean, worst);
   EXPECT_EQ(notes.size(), 8u);
-  // Measured: temporal median 0.202 / 0.000, plate-free 0.973 / 0.787.
+  // Measured: temporal median 0.202 / 0.000, plate-free 0.980 / 0.924 (0.973 / 0.787 when the
+  // occupancy left out the strict hull and pixels never free took the first estimate's colour).
   EXPECT_LT(median_mean, 0.5);  // the scene is hard for the median: the actor stands in it
   EXPECT_GE(mean, 0.95);
-  EXPECT_GE(worst, 0.75);
+  EXPECT_GE(worst, 0.88);
 }
 
 }  // namespace
