@@ -183,7 +183,7 @@ BackgroundModel BackgroundModel::FromFrames(const std::vector<Image>& frames, co
     free.clear();
     for (std::size_t k = 0; k < frames.size(); ++k)
       if (occupied.empty() || occupied[k].data[i] == 0) free.push_back(k);
-    if (free.size() < 2) {
+    if (free.size() < static_cast<std::size_t>(kMinFreeSamples)) {
       guessed[i] = true;
       if (!estimate.empty()) {
         for (int c = 0; c < 3; ++c) model.mean_[i * 3 + c] = estimate.data[i * 3 + c];

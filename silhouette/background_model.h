@@ -63,9 +63,10 @@ class BackgroundModel {
   // Learned background: per-pixel temporal median of `frames` (8-bit RGB, same size; at least
   // 3), spread from the per-pixel median absolute deviation. Throws InputError(`source`).
   // With `occupied` (one 1-channel mask per frame, nonzero where the actor may be), only the
-  // free samples of a pixel count; a pixel free in fewer than 2 frames takes the colour of
-  // `estimate` (8-bit RGB of the frames' size; without it, the median of all samples) and a
-  // doubled spread.
+  // free samples of a pixel count; a pixel free in fewer than kMinFreeSamples frames takes the
+  // colour of `estimate` (8-bit RGB of the frames' size; without it, the median of all samples)
+  // and a doubled spread.
+  static constexpr int kMinFreeSamples = 2;
   static BackgroundModel FromFrames(const std::vector<Image>& frames, const BackgroundModelOptions& options,
                                     const std::string& source = {}, const std::vector<Image>& occupied = {},
                                     const Image& estimate = {});

@@ -33,6 +33,13 @@ cv::Mat Grow(const cv::Mat& mask, double per_1000) {
   return grown;
 }
 
+// `image` (8-bit RGB) filled in over `region` (nonzero) from around it.
+Image InpaintOver(const Image& image, const cv::Mat& region) {
+  cv::Mat filled;
+  cv::inpaint(AsCvMat(image), region, filled, 5.0, cv::INPAINT_TELEA);
+  return ImageFromCvMat(filled);
+}
+
 // A model learned from `frames` with the given occupancy, its thresholds fitted to the first frames.
 BackgroundModel Learn(const std::vector<Image>& frames, const std::vector<Image>& occupied, const Image& estimate,
                       const BackgroundModelOptions& options, const std::string& name) {
@@ -57,9 +64,7 @@ BackgroundModel FirstEstimate(const std::vector<Image>& frames, const Background
   }
   envelope = Grow(envelope, plate_free.occupancy_margin);
   const Image mean = median.MeanImage();
-  cv::Mat filled;
-  cv::inpaint(AsCvMat(mean), envelope, filled, 5.0, cv::INPAINT_TELEA);
-  *estimate = ImageFromCvMat(filled);
+  *estimate = InpaintOver(mean, envelope);
   const std::size_t pixels = static_cast<std::size_t>(w) * h;
   std::vector<Image> occupied(frames.size(), Image(w, h, 1));
   const double sigma = std::max(1.0, median.noise_sigma());
@@ -115,25 +120,24 @@ class ColourPrior {
 };
 
 // The background estimate for one round: `first_estimate` inpainted over the pixels that
-// `occupied` leaves with fewer than 2 free samples (which take the estimate's colour). Outside
+// `occupied` leaves with too few free samples (which take the estimate's colour). Outside
 // the first estimate's "ever changed" envelope that estimate is the temporal median, which where
 // the actor stood still is the actor: the surrounding background is the better guess.
 Image InpaintNeverFree(const Image& first_estimate, const std::vector<Image>& occupied) {
   const std::size_t pixels = static_cast<std::size_t>(first_estimate.width) * first_estimate.height;
   cv::Mat never_free = cv::Mat::zeros(first_estimate.height, first_estimate.width, CV_8U);
   bool any = false;
+  const int enough = BackgroundModel::kMinFreeSamples;
   for (std::size_t i = 0; i < pixels; ++i) {
     int free = 0;
-    for (std::size_t k = 0; k < occupied.size() && free < 2; ++k) free += occupied[k].data[i] == 0;
-    if (free < 2) never_free.data[i] = 255, any = true;
+    for (std::size_t k = 0; k < occupied.size() && free < enough; ++k) free += occupied[k].data[i] == 0;
+    if (free < enough) never_free.data[i] = 255, any = true;
   }
   if (!any) return first_estimate;
   // Grown a little, so that the fill starts from the background around them and not from
   // their own rim.
   cv::dilate(never_free, never_free, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
-  cv::Mat filled;
-  cv::inpaint(AsCvMat(first_estimate), never_free, filled, 5.0, cv::INPAINT_TELEA);
-  return ImageFromCvMat(filled);
+  return InpaintOver(first_estimate, never_free);
 }
 
 }  // namespace
