@@ -162,8 +162,9 @@ bool Rejects(const Camera& camera, const Image& mask, const Eigen::Vector3d& poi
 
 std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Image>& masks,
                                           const std::vector<int>& targets, const VisualHullOptions& options,
-                                          std::vector<Image>* hull_masks) {
+                                          std::vector<Image>* hull_masks, HullUnderside* underside) {
   options.Check();
+  if (underside != nullptr) *underside = HullUnderside();
   const int n = rig.size();
   if (static_cast<int>(masks.size()) != n) throw UsageError("VisualHullConsistency: one mask per camera is needed");
   for (int i = 0; i < n; ++i)
@@ -237,6 +238,16 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
       }
   });
 
+  if (underside != nullptr) {
+    underside->voxel_m = grid.voxel_m;
+    for (int y = 0; y < grid.size.y(); ++y)
+      for (int x = 0; x < grid.size.x(); ++x)
+        for (int z = 0; z < grid.size.z(); ++z)
+          if (rejections[grid.Index(x, y, z)] <= allowed) {
+            underside->lowest.push_back(grid.Center(x, y, z));
+            break;
+          }
+  }
   ious.assign(target_list.size(), 0.0);
   std::vector<Image> hulls(target_list.size());
   ParallelFor(static_cast<int>(target_list.size()), options.threads, [&](int target_index) {

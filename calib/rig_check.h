@@ -54,14 +54,23 @@ struct VisualHullOptions {
   void Check() const;
 };
 
+// The hull seen from below: the centre of the lowest voxel of each vertical (z) column of voxels
+// that holds any, and the voxel size.
+struct HullUnderside {
+  double voxel_m = 0;
+  std::vector<Eigen::Vector3d> lowest;
+};
+
 // Visual-hull consistency: for each camera in `targets` (all cameras when empty), carve a
 // hull from the masks of the other cameras (all non-target cameras when `targets` is given;
 // every other camera otherwise), project it into the target and compare with its mask.
 // `masks[i]` is a 1-channel 8-bit mask (0/255) of rig camera i. Returns IoU per target camera
-// (same order as `targets`, or rig order). `hull_masks`, if given, receives the projected hulls.
+// (same order as `targets`, or rig order). `hull_masks`, if given, receives the projected hulls;
+// `underside` the underside of the union of the targets' hulls.
 std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Image>& masks,
                                           const std::vector<int>& targets, const VisualHullOptions& options = {},
-                                          std::vector<Image>* hull_masks = nullptr);
+                                          std::vector<Image>* hull_masks = nullptr,
+                                          HullUnderside* underside = nullptr);
 
 // An overlay of the world axes (X red, Y green, Z blue, 1 m) and a 1 m ground grid on z = 0
 // projected into `camera`, drawn onto `image` (8-bit RGB; distortion respected).

@@ -41,8 +41,9 @@ int ScaledRadius(double per_1000, int width) {
 
 std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* masks, const std::vector<bool>& correct,
                                             const MultiViewOptions& options, std::vector<Image>* hulls,
-                                            std::vector<Image>* strict_hulls) {
+                                            std::vector<Image>* strict_hulls, HullUnderside* underside) {
   options.Check();
+  if (underside != nullptr) *underside = HullUnderside();
   const int n = rig.size();
   if (static_cast<int>(masks->size()) != n) throw UsageError("CheckMultiView: one mask (or an empty image) per camera");
   if (!correct.empty() && static_cast<int>(correct.size()) != n)
@@ -83,7 +84,7 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   hull_options.tolerated_rejections =
       options.tolerated_rejections >= 0 ? options.tolerated_rejections : (with_mask - 1 >= 4 ? 1 : 0);
   std::vector<Image> projected, strict;
-  VisualHullConsistency(rig, carving, {}, hull_options, &projected);
+  VisualHullConsistency(rig, carving, {}, hull_options, &projected, underside);
   std::vector<cv::Mat> near_hulls(n);
   std::vector<double> explained(n, 1.0), explained_area(n, 0.0), explained_list;
   for (int c = 0; c < n; ++c) {
@@ -173,6 +174,24 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
     if (hulls != nullptr) (*hulls)[c] = std::move(projected[c]);
   }
   return result;
+}
+
+Image ProjectColumnsToFloor(const Camera& camera, const HullUnderside& underside) {
+  Image columns(camera.width, camera.height, 1);
+  cv::Mat canvas = AsCvMat(columns);
+  const double focal = 0.5 * (camera.K(0, 0) + camera.K(1, 1));
+  for (const Eigen::Vector3d& top : underside.lowest) {
+    if (top.z() <= 0) continue;
+    const Eigen::Vector3d floor(top.x(), top.y(), 0.0);
+    Eigen::Vector2d a, b;
+    if (!camera.ProjectChecked(top, &a) || !camera.ProjectChecked(floor, &b)) continue;
+    const double depth = std::min(camera.PointInCamera(top).z(), camera.PointInCamera(floor).z());
+    const int width = std::max(1, static_cast<int>(std::lround(focal * underside.voxel_m / depth)));
+    cv::line(canvas, cv::Point(static_cast<int>(std::lround(a.x())), static_cast<int>(std::lround(a.y()))),
+             cv::Point(static_cast<int>(std::lround(b.x())), static_cast<int>(std::lround(b.y()))), cv::Scalar(255),
+             width);
+  }
+  return columns;
 }
 
 int ClaimHighlightsInsideHull(Image* mask, const Image& frame, const BackgroundModel& model, const Image& hull,

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "calib/camera.h"
+#include "calib/rig_check.h"
 #include "core/image.h"
 #include "silhouette/background_model.h"
 
@@ -50,11 +51,18 @@ struct ViewConsistency {
 // others, and corrects the masks of the cameras with `correct[i]` (empty: none). Needs 3 or more
 // cameras with masks; with fewer every confidence is 1 and nothing changes. `hulls`, if given,
 // receives each camera's projected tolerant hull of the others (empty for cameras without a
-// mask), `strict_hulls` the strict one.
+// mask), `strict_hulls` the strict one, `underside` the underside of the tolerant hulls.
 // Throws InputError naming the camera whose mask differs in size from its calibration.
 std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* masks, const std::vector<bool>& correct,
                                             const MultiViewOptions& options, std::vector<Image>* hulls = nullptr,
-                                            std::vector<Image>* strict_hulls = nullptr);
+                                            std::vector<Image>* strict_hulls = nullptr,
+                                            HullUnderside* underside = nullptr);
+
+// What lies below a hull down to the floor (z = 0), seen by `camera` (1-channel 0/255): each
+// column of `underside` drawn as a segment from its lowest voxel to the floor, a voxel wide. A
+// standing person's feet lie there even when every camera's mask loses them against their
+// shadow.
+Image ProjectColumnsToFloor(const Camera& camera, const HullUnderside& underside);
 
 // Claims for `mask` (1-channel 0/255, made with `model` from a clean plate) the pixels of
 // `frame` (8-bit RGB) that the model calls a highlight of the background where `hull` (the

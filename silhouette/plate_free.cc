@@ -178,8 +178,9 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
       for (int c = 0; c < n; ++c)
         if (!frames[c].empty() && !models[c].empty()) masks[c] = CleanMask(models[c].Classify(frames[c][k]), cleanup);
       std::vector<Image> hulls, strict_hulls;
+      HullUnderside underside;
       const std::vector<ViewConsistency> views =
-          CheckMultiView(rig, &masks, learn, options.multiview, &hulls, &strict_hulls);
+          CheckMultiView(rig, &masks, learn, options.multiview, &hulls, &strict_hulls, &underside);
       for (int c = 0; c < n; ++c) {
         if (!learn[c]) continue;
         // The strict hull counts too: it leaves out the cameras whose masks it does not explain,
@@ -188,6 +189,10 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
         cv::Mat occupancy = AsCvMat(masks[c]).clone();
         if (!hulls[c].empty()) cv::bitwise_or(occupancy, AsCvMat(hulls[c]), occupancy);
         if (!strict_hulls[c].empty()) cv::bitwise_or(occupancy, AsCvMat(strict_hulls[c]), occupancy);
+        // And what lies below the hull down to the floor: a performer who stands still is found
+        // only where they move (a shirt, the arms), but their legs and feet are below.
+        if (options.columns_to_floor)
+          cv::bitwise_or(occupancy, AsCvMat(ProjectColumnsToFloor(rig.cameras[c], underside)), occupancy);
         occupied[c].push_back(ImageFromCvMat(Grow(occupancy, options.occupancy_margin)));
         // Colour samples: the actor where the mask and the hull agree (eroded), the background
         // well away from both.

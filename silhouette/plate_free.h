@@ -24,6 +24,9 @@ struct PlateFreeOptions {
   // Occupancy is the corrected mask and the others' hulls (tolerant and strict), grown by this
   // margin (per 1000 pixels of image width).
   double occupancy_margin = 10.0;
+  // The occupancy also takes what lies below the hull down to the floor (z = 0): the legs of a
+  // performer who hardly moves, whom the masks find only where they move.
+  bool columns_to_floor = true;
   // A pixel the actor may cover (its samples differ from the median) takes the samples within
   // this many noise sigmas (plus 4% of the colour's brightness) of the nearest sample to the
   // inpainted background.
