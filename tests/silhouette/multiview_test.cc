@@ -207,11 +207,11 @@ TEST(MultiView, ColumnsBelowTheHullOfAnUpperBodyCoverTheLostLegs) {
 }
 
 // Frames of an actor who stands still for the first half (the temporal median holds them), then
-// walks away waving: per camera a textured background with sensor noise.
+// walks away waving, or (still_legs) whose legs never move: per camera a textured background
+// with sensor noise.
 struct PlateFreeScene {
   Rig rig = testing::MakeRingRig(8, 160, 120);
   std::vector<std::vector<Image>> frames, truth;
-  // still_legs: the legs never move, while the upper body sways and waves the whole video.
   explicit PlateFreeScene(int count, bool still_legs = false) {
     frames.resize(rig.size());
     truth.resize(rig.size());
@@ -219,11 +219,10 @@ struct PlateFreeScene {
       const Image plate = testing::MakeTexturedPlate(160, 120, 11 + c);
       for (int k = 0; k < count; ++k) {
         const double walked = k < count / 2 ? 0.0 : 0.06 * (k - count / 2);
-        auto actor = testing::MakeActor(walked, 0.5 * walked, k < count / 2 ? 0.0 : 0.1 * (k % 10));
-        if (still_legs) {
-          actor = testing::MakeActor(0.0, 0.0, 0.1 * (k % 10));
+        auto actor = still_legs ? testing::MakeActor(0.0, 0.0, 0.1 * (k % 10))
+                                : testing::MakeActor(walked, 0.5 * walked, k < count / 2 ? 0.0 : 0.1 * (k % 10));
+        if (still_legs)  // everything above the two legs sways sideways
           for (std::size_t part = 2; part < actor.size(); ++part) actor[part].center.x() += 0.06 * ((k % 4) - 1.5);
-        }
         Image frame = testing::RenderFrame(rig.cameras[c], actor, plate);
         testing::AddNoise(&frame, 2.0, 100 * c + k);
         frames[c].push_back(frame);
