@@ -19,9 +19,9 @@
 #include <filesystem>
 #include <map>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
+#include "bench/scratch_folder.h"
 #include "core/statistics.h"
 #include "pipeline/run_capture.h"
 #include "pipeline/run_folder.h"
@@ -32,15 +32,6 @@ namespace confluent {
 namespace {
 namespace fs = std::filesystem;
 
-// A temporary folder, removed with everything in it when the program ends.
-struct ScratchFolder {
-  fs::path path = fs::temp_directory_path() / ("confluent_bench_run_" + std::to_string(::getpid()));
-  ~ScratchFolder() {
-    std::error_code ignored;
-    fs::remove_all(path, ignored);
-  }
-};
-
 // The capture to run (given, or synthesised once per process) and the run folder.
 struct Workspace {
   std::string capture;
@@ -48,7 +39,7 @@ struct Workspace {
 };
 
 const Workspace& GetWorkspace() {
-  static const ScratchFolder scratch;
+  static const ScratchFolder scratch("confluent_bench_run_");
   static const Workspace workspace = [] {
     Workspace w;
     w.run = scratch.path / "run";

@@ -17,6 +17,7 @@
 #include "core/image_io.h"
 #include "core/video.h"
 #include "silhouette/classify_kernel.h"
+#include "silhouette/disk_morphology.h"
 #include "silhouette/silhouette.h"
 
 namespace confluent {
@@ -140,6 +141,28 @@ void BM_ClaimHighlightsOneCamera(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ClaimHighlightsOneCamera)->Unit(benchmark::kMillisecond);
+
+// The multi-view correction's closing of a mask (a disk of 41 pixels: MultiViewOptions::hole_close
+// at 1024 pixels of width), worked in the box around the mask (arg 1, as CheckMultiView does) or
+// the same closing over the whole image (arg 0).
+void BM_CloseByDisk41(benchmark::State& state) {
+  Rig8& rig = SharedRig();
+  const Image mask = CleanMask(rig.extractors[0].model().Classify(rig.frames[0]), MaskCleanupOptions{});
+  const cv::Mat m = AsCvMat(mask);
+  const int radius = 41;
+  for (auto _ : state) {
+    if (state.range(0) == 1) {
+      benchmark::DoNotOptimize(CloseByDisk(m, radius));
+    } else {
+      cv::Mat closed;
+      cv::morphologyEx(m, closed, cv::MORPH_CLOSE, Disk(radius), cv::Point(-1, -1), 1, cv::BORDER_CONSTANT,
+                       cv::Scalar(0));
+      benchmark::DoNotOptimize(closed);
+    }
+  }
+  state.SetLabel(state.range(0) == 1 ? "in the mask's box" : "whole image");
+}
+BENCHMARK(BM_CloseByDisk41)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // The classification loop alone, per instruction set (0 baseline x86-64, 1 AVX2, 2 AVX-512),
 // with a planar model of the plate's colours.

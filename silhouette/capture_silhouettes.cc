@@ -42,7 +42,7 @@ void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& opt
   });
   std::vector<std::string> notes;
   models = LearnBackgroundsWithoutPlates(capture.rig(), frames, models, options.background, options.cleanup,
-                                         options.plate_free, &notes);
+                                         options.plate_free, &notes, options.threads);
   for (int c = 0; c < n; ++c) {
     if (excluded(c) || (*extractors)[c]->info().method != SilhouetteMethod::kLearned) continue;
     std::vector<std::string> warnings;

@@ -6,6 +6,7 @@
 
 #include "core/cv_interop.h"
 #include "core/error.h"
+#include "silhouette/disk_morphology.h"
 
 namespace confluent {
 
@@ -16,26 +17,16 @@ void GrabCutRefineOptions::Check() const {
   RequireOption(core >= 0 && core <= 200, owner + "core", core, "in [0, 200]");
 }
 
-namespace {
-
-cv::Mat Disk(double per_1000, int width) {
-  const int radius = std::max(1, static_cast<int>(std::lround(per_1000 * width / 1000.0)));
-  return cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
-}
-
-}  // namespace
-
 Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull, const GrabCutRefineOptions& options) {
   options.Check();
   const cv::Mat m = AsCvMat(mask);
   if (cv::countNonZero(m) == 0) return mask;
   cv::Mat region = m.clone();
   if (!hull.empty()) cv::bitwise_or(region, AsCvMat(hull), region);
-  cv::Mat near;
-  cv::dilate(region, near, Disk(options.band, mask.width));
+  const cv::Mat near = DilateByDisk(region, ScaledRadius(options.band, mask.width));
   cv::Mat core = m.clone();
   if (!hull.empty()) cv::bitwise_and(core, AsCvMat(hull), core);
-  if (options.core > 0) cv::erode(core, core, Disk(options.core, mask.width));
+  if (options.core > 0) core = ErodeByDisk(core, ScaledRadius(options.core, mask.width));
   // Work inside the band's bounding box (with a margin of certain background).
   cv::Rect box = cv::boundingRect(near);
   const int margin = 4;

@@ -9,6 +9,7 @@
 
 #include "core/cv_interop.h"
 #include "core/error.h"
+#include "silhouette/disk_morphology.h"
 
 namespace confluent {
 
@@ -30,10 +31,6 @@ void MaskCleanupOptions::Check() const {
 }
 
 namespace {
-
-cv::Mat Disk(int radius) {
-  return cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
-}
 
 // Gap between two boxes (0 when they overlap), pixels.
 double BoxGap(const cv::Rect& a, const cv::Rect& b) {

@@ -9,6 +9,7 @@
 #include "calib/rig_check.h"
 #include "core/cv_interop.h"
 #include "core/error.h"
+#include "silhouette/disk_morphology.h"
 
 namespace confluent {
 
@@ -24,20 +25,6 @@ void MultiViewOptions::Check() const {
   RequireOption(min_confidence >= 0 && min_confidence <= 1, owner + "min_confidence", min_confidence, "in [0, 1]");
   RequireOption(threads >= 1, owner + "threads", threads, ">= 1");
 }
-
-namespace {
-
-cv::Mat Disk(int radius) {
-  return cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
-}
-
-// A margin given per 1000 pixels of width, in pixels of this image (at least 1 when positive).
-int ScaledRadius(double per_1000, int width) {
-  if (per_1000 <= 0) return 0;
-  return std::max(1, static_cast<int>(std::lround(per_1000 * width / 1000.0)));
-}
-
-}  // namespace
 
 std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* masks, const std::vector<bool>& correct,
                                             const MultiViewOptions& options, std::vector<Image>* hulls,
@@ -91,7 +78,7 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
     if ((*masks)[c].empty()) continue;
     const cv::Mat hull = AsCvMat(projected[c]);
     const int radius = ScaledRadius(options.ghost_margin, (*masks)[c].width);
-    if (radius > 0) cv::dilate(hull, near_hulls[c], Disk(radius)); else near_hulls[c] = hull;
+    near_hulls[c] = radius > 0 ? DilateByDisk(hull, radius) : hull;
     const cv::Mat m = AsCvMat((*masks)[c]);
     cv::Mat both;
     cv::bitwise_and(m, near_hulls[c], both);
@@ -143,13 +130,8 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
       view.removed = static_cast<int>(area - explained_area[c]);
       // Holes: deep inside the hull and enclosed by the mask (its closing).
       const int deep = ScaledRadius(options.hole_margin, width), close = ScaledRadius(options.hole_close, width);
-      cv::Mat inner, closed;
-      if (deep > 0) cv::erode(tight, inner, Disk(deep)); else inner = tight;
-      if (close > 0)
-        cv::morphologyEx(corrected, closed, cv::MORPH_CLOSE, Disk(close), cv::Point(-1, -1), 1, cv::BORDER_CONSTANT,
-                         cv::Scalar(0));
-      else
-        closed = corrected;
+      const cv::Mat inner = deep > 0 ? ErodeByDisk(tight, deep) : tight;
+      const cv::Mat closed = close > 0 ? CloseByDisk(corrected, close) : corrected;
       cv::Mat fill;
       cv::bitwise_and(inner, closed, fill);
       const double before = cv::countNonZero(corrected);

@@ -7,6 +7,8 @@
 
 #include "core/cv_interop.h"
 #include "core/error.h"
+#include "core/parallel.h"
+#include "silhouette/disk_morphology.h"
 
 namespace confluent {
 
@@ -25,13 +27,7 @@ void PlateFreeOptions::Check() const {
 namespace {
 
 // `mask` grown by `per_1000` pixels per 1000 pixels of width.
-cv::Mat Grow(const cv::Mat& mask, double per_1000) {
-  const int radius = per_1000 > 0 ? std::max(1, static_cast<int>(std::lround(per_1000 * mask.cols / 1000.0))) : 0;
-  if (radius == 0) return mask.clone();
-  cv::Mat grown;
-  cv::dilate(mask, grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1)));
-  return grown;
-}
+cv::Mat Grow(const cv::Mat& mask, double per_1000) { return DilateByDisk(mask, ScaledRadius(per_1000, mask.cols)); }
 
 // `image` (8-bit RGB) filled in over `region` (nonzero) from around it.
 Image InpaintOver(const Image& image, const cv::Mat& region) {
@@ -147,8 +143,9 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
                                                            const BackgroundModelOptions& background,
                                                            const MaskCleanupOptions& cleanup,
                                                            const PlateFreeOptions& options,
-                                                           std::vector<std::string>* notes) {
+                                                           std::vector<std::string>* notes, int threads) {
   options.Check();
+  RequireOption(threads >= 1, "LearnBackgroundsWithoutPlates threads", threads, ">= 1");
   background.Check();
   cleanup.Check();
   const int n = rig.size();
@@ -164,25 +161,25 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
   if (samples < 3) throw InputError(n > 0 ? rig.cameras[0].name : "", "a learned background needs at least 3 frames");
   std::vector<bool> learn(n, false);
   std::vector<Image> estimate(n);
-  for (int c = 0; c < n; ++c) {
-    if (frames[c].empty() || !models[c].empty()) continue;
-    learn[c] = true;
-    models[c] = FirstEstimate(frames[c], background, cleanup, options, rig.cameras[c].name, &estimate[c]);
-  }
+  for (int c = 0; c < n; ++c) learn[c] = !frames[c].empty() && models[c].empty();
+  ParallelFor(n, threads, [&](int c) {
+    if (learn[c]) models[c] = FirstEstimate(frames[c], background, cleanup, options, rig.cameras[c].name, &estimate[c]);
+  });
+  MultiViewOptions multiview = options.multiview;
+  multiview.threads = threads;
   for (int round = 0; round < options.iterations; ++round) {
-    std::vector<std::vector<Image>> occupied(n);
+    std::vector<std::vector<Image>> occupied(n, std::vector<Image>(samples));
     std::vector<ColourPrior> priors(n);
-    std::vector<double> added(n, 0), removed(n, 0);
     for (std::size_t k = 0; k < samples; ++k) {
       std::vector<Image> masks(n);
-      for (int c = 0; c < n; ++c)
+      ParallelFor(n, threads, [&](int c) {
         if (!frames[c].empty() && !models[c].empty()) masks[c] = CleanMask(models[c].Classify(frames[c][k]), cleanup);
+      });
       std::vector<Image> hulls, strict_hulls;
       HullUnderside underside;
-      const std::vector<ViewConsistency> views =
-          CheckMultiView(rig, &masks, learn, options.multiview, &hulls, &strict_hulls, &underside);
-      for (int c = 0; c < n; ++c) {
-        if (!learn[c]) continue;
+      CheckMultiView(rig, &masks, learn, multiview, &hulls, &strict_hulls, &underside);
+      ParallelFor(n, threads, [&](int c) {
+        if (!learn[c]) return;
         // The strict hull counts too: it leaves out the cameras whose masks it does not explain,
         // so it keeps a still actor (a head, a torso) that several cameras' masks miss, which the
         // tolerant hull loses.
@@ -193,7 +190,7 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
         // only where they move (a shirt, the arms), but their legs and feet are below.
         if (options.columns_to_floor)
           cv::bitwise_or(occupancy, AsCvMat(ProjectColumnsToFloor(rig.cameras[c], underside)), occupancy);
-        occupied[c].push_back(ImageFromCvMat(Grow(occupancy, options.occupancy_margin)));
+        occupied[c][k] = ImageFromCvMat(Grow(occupancy, options.occupancy_margin));
         // Colour samples: the actor where the mask and the hull agree (eroded), the background
         // well away from both.
         cv::Mat actor = AsCvMat(masks[c]).clone(), far;
@@ -201,12 +198,10 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
         cv::erode(actor, actor, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
         cv::bitwise_not(Grow(occupancy, 3 * options.occupancy_margin), far);
         priors[c].Add(frames[c][k], actor, far);
-        added[c] += views[c].added;
-        removed[c] += views[c].removed;
-      }
+      });
     }
-    for (int c = 0; c < n; ++c) {
-      if (!learn[c]) continue;
+    ParallelFor(n, threads, [&](int c) {
+      if (!learn[c]) return;
       // Lock-in breaker: where a ghost keeps the true background out of the free samples, a
       // clearly background-coloured sample counts as free, a clearly actor-coloured one never.
       const std::size_t pixels = static_cast<std::size_t>(frames[c][0].width) * frames[c][0].height;
@@ -218,7 +213,7 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
         }
       models[c] = Learn(frames[c], occupied[c], InpaintNeverFree(estimate[c], occupied[c]), background,
                         rig.cameras[c].name);
-    }
+    });
   }
   if (notes != nullptr)
     for (int c = 0; c < n; ++c)

@@ -43,12 +43,14 @@ struct PlateFreeOptions {
 // `frames[c]` are the sampled frames of camera c (8-bit RGB, the same instants for every
 // camera, at least 3). `models[c]` holds a model already known (a plate) that is kept, or an
 // empty model for a camera to learn; cameras with an empty `frames[c]` are left out. Returns
-// the models; `notes` receives one line per camera learned.
+// the models; `notes` receives one line per camera learned. Work is spread over up to `threads`
+// threads; the result does not depend on their number.
 std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const std::vector<std::vector<Image>>& frames,
                                                            std::vector<BackgroundModel> models,
                                                            const BackgroundModelOptions& background,
                                                            const MaskCleanupOptions& cleanup,
                                                            const PlateFreeOptions& options,
-                                                           std::vector<std::string>* notes = nullptr);
+                                                           std::vector<std::string>* notes = nullptr,
+                                                           int threads = 1);
 
 }  // namespace confluent
