@@ -391,4 +391,9 @@ Image BackgroundModel::MeanImage() const {
   return image;
 }
 
+Eigen::Vector3f BackgroundModel::MeanAt(int x, int y) const {
+  const std::size_t at = (static_cast<std::size_t>(y) * width_ + x) * 3;
+  return {mean_[at], mean_[at + 1], mean_[at + 2]};
+}
+
 }  // namespace confluent

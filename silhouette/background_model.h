@@ -3,6 +3,7 @@
 // (Horprasert, Harwood and Davis 1999): shadows and highlights of the background are not
 // foreground. Built from clean plates or learned from the video (temporal median).
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -92,6 +93,8 @@ class BackgroundModel {
   bool empty() const { return width_ == 0; }
   // Mean background colour as an 8-bit RGB image.
   Image MeanImage() const;
+  // Mean background colour (RGB, 8-bit scale) of pixel (x, y).
+  Eigen::Vector3f MeanAt(int x, int y) const;
   // Estimated sensor noise (grey levels) of the source plates or frames.
   double noise_sigma() const { return noise_sigma_; }
   // Factor by which auto thresholding scaled the spreads (1 = the noise model fits).

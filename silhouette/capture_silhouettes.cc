@@ -132,12 +132,13 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
     });
     std::vector<ViewConsistency> views;
     std::vector<Image> hulls, strict_hulls;
+    HullUnderside underside;  // of the others' hulls: where feet may stand
     if (options.multiview_check) {
       std::vector<Image> checked(num_cameras);  // excluded cameras: no mask
       for (int c = 0; c < num_cameras; ++c)
         if (!excluded(c)) checked[c] = std::move(masks[c]);
       views = CheckMultiView(capture.rig(), &checked, correct, any_correct ? multiview : check_only, &hulls,
-                             &strict_hulls);
+                             &strict_hulls, options.feet.enabled && any_correct ? &underside : nullptr);
       for (int c = 0; c < num_cameras; ++c) {
         if (excluded(c)) continue;
         masks[c] = std::move(checked[c]);
@@ -160,6 +161,16 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         views[c].added += ReplaceMask(
             &masks[c], CleanMask(RefineMaskGrabCut(ToRgb8(images[c]), masks[c], strict_hulls[c], options.grabcut),
                                  options.cleanup));
+      });
+    if (options.feet.enabled && !views.empty())
+      ParallelFor(num_cameras, options.threads, [&](int c) {
+        if (!correct[c] || extractors[c]->info().method != SilhouetteMethod::kLearned) return;
+        Image converted;  // only when the frame is not 8-bit RGB already
+        const bool rgb8 = images[c].type == PixelType::kUInt8 && images[c].channels == 3;
+        const int added = RestoreFeetBelowHull(&masks[c], rgb8 ? images[c] : (converted = ToRgb8(images[c])),
+                                               capture.rig().cameras[c], underside, extractors[c]->model(),
+                                               options.feet);
+        if (added > 0) views[c].added += added + ReplaceMask(&masks[c], CleanMask(masks[c], options.cleanup));
       });
     for (int c = 0; c < num_cameras; ++c) {
       MaskSummary& check = checks[c];

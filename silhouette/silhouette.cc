@@ -50,6 +50,7 @@ void SilhouetteOptions::Check() const {
   RequireOption(max_parts >= 1, owner + "max_parts", max_parts, ">= 1");
   plate_free.Check();
   grabcut.Check();
+  feet.Check();
 }
 
 int SilhouetteSummary::num_flagged() const {

@@ -12,6 +12,7 @@
 #include "core/progress.h"
 #include "silhouette/background_model.h"
 #include "silhouette/chroma_key.h"
+#include "silhouette/feet_restore.h"
 #include "silhouette/grabcut_refine.h"
 #include "silhouette/mask_cleanup.h"
 #include "silhouette/multiview.h"
@@ -68,6 +69,9 @@ struct SilhouetteOptions {
   // models of the actor and its surroundings (silhouette/grabcut_refine.h).
   bool grabcut_learned = true;
   GrabCutRefineOptions grabcut;
+  // After it, dark feet that the graph cut took for the floor's shadow are put back from below
+  // the other cameras' hull (silhouette/feet_restore.h); cameras without a plate only.
+  FeetRestoreOptions feet;
   // Worker threads for a capture (cameras are processed in parallel).
   int threads = 2;
   // Throws UsageError naming the bad field (also of the nested options).
