@@ -1,0 +1,99 @@
+// The graph cut's boundary refinement against exact masks, and its second cut when the first
+// takes a part of the actor for the background.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+#include "core/cv_interop.h"
+#include "core/error.h"
+#include "silhouette/grabcut_refine.h"
+#include "tests/silhouette/synthetic_scene.h"
+
+namespace confluent {
+namespace {
+
+using testing::Iou;
+
+constexpr int kWidth = 240, kHeight = 240;
+const cv::Scalar kWall(70, 90, 150), kFloor(110, 80, 55);
+
+// A blue-grey wall over a brown floor, and a body: a head, a torso, red legs.
+struct Body {
+  Image frame{kWidth, kHeight, 3};
+  Image truth{kWidth, kHeight, 1};
+  Image torso{kWidth, kHeight, 1};
+  explicit Body(const cv::Scalar& shirt) {
+    cv::Mat image = AsCvMat(frame), mask = AsCvMat(truth), upper = AsCvMat(torso);
+    image(cv::Rect(0, 0, kWidth, 130)).setTo(kWall);
+    image(cv::Rect(0, 130, kWidth, kHeight - 130)).setTo(kFloor);
+    const auto draw = [&](const cv::Point& centre, const cv::Size& axes, const cv::Scalar& colour, bool is_torso) {
+      cv::ellipse(image, centre, axes, 0, 0, 360, colour, cv::FILLED);
+      cv::ellipse(mask, centre, axes, 0, 0, 360, cv::Scalar(255), cv::FILLED);
+      if (is_torso) cv::ellipse(upper, centre, axes, 0, 0, 360, cv::Scalar(255), cv::FILLED);
+    };
+    draw({120, 95}, {32, 50}, shirt, true);
+    draw({105, 175}, {12, 45}, cv::Scalar(170, 40, 40), false);
+    draw({135, 175}, {12, 45}, cv::Scalar(170, 40, 40), false);
+    draw({120, 35}, {14, 17}, cv::Scalar(220, 170, 140), false);
+    cv::bitwise_and(upper, ~(mask - upper), upper);
+    testing::AddNoise(&frame, 3.0, 5);
+  }
+};
+
+TEST(GrabCutRefine, RemovesAGhostRimAndFillsAHole) {
+  const Body body(cv::Scalar(200, 60, 50));  // a red shirt: the colours tell actor from wall
+  Image mask = body.truth;
+  cv::Mat m = AsCvMat(mask);
+  cv::dilate(m, m, cv::getStructuringElement(cv::MORPH_ELLIPSE, {9, 9}));  // a 4-pixel ghost rim
+  cv::circle(m, {120, 100}, 9, cv::Scalar(0), cv::FILLED);                  // a hole in the shirt
+  Image hull = body.truth;
+  cv::dilate(AsCvMat(hull), AsCvMat(hull), cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7}));
+  const Image refined = RefineMaskGrabCut(body.frame, mask, hull, {});
+  std::printf("IoU %.3f -> %.3f\n", Iou(mask, body.truth), Iou(refined, body.truth));
+  EXPECT_LT(Iou(mask, body.truth), 0.85);
+  EXPECT_GE(Iou(refined, body.truth), 0.97);
+}
+
+// A shirt of the wall's colour that the mask holds only in stripes: the first cut takes the
+// shirt for the wall and loses it; the second keeps the hull's deep inside.
+TEST(GrabCutRefine, CutsAgainWhenTheFirstCutLosesWhatTheHullHolds) {
+  const Body body(kWall + cv::Scalar(8, 6, -6));
+  Image mask = body.truth;
+  cv::Mat m = AsCvMat(mask);
+  for (int y = 40; y < 150; y += 12) m(cv::Rect(0, y, kWidth, 4)).setTo(0, AsCvMat(body.torso)(cv::Rect(0, y, kWidth, 4)));
+  Image hull = body.truth;
+  cv::dilate(AsCvMat(hull), AsCvMat(hull), cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7}));
+  GrabCutRefineOptions once;
+  once.retry_drop = 1;
+  const Image first = RefineMaskGrabCut(body.frame, mask, hull, once);
+  const Image again = RefineMaskGrabCut(body.frame, mask, hull, {});
+  const auto torso_kept = [&](const Image& result) {
+    int kept = 0, total = 0;
+    for (std::size_t i = 0; i < result.data.size(); ++i) {
+      total += body.torso.data[i] != 0;
+      kept += body.torso.data[i] != 0 && result.data[i] != 0;
+    }
+    return static_cast<double>(kept) / total;
+  };
+  std::printf("torso kept: mask %.3f, one cut %.3f, with the second cut %.3f; IoU %.3f -> %.3f\n", torso_kept(mask),
+              torso_kept(first), torso_kept(again), Iou(first, body.truth), Iou(again, body.truth));
+  EXPECT_LT(torso_kept(first), 0.3);  // the failure the second cut is for
+  EXPECT_GE(torso_kept(again), 0.8);
+  EXPECT_GT(Iou(again, body.truth), Iou(first, body.truth) + 0.2);
+}
+
+TEST(GrabCutRefine, BadOptionsAreNamed) {
+  GrabCutRefineOptions options;
+  options.retry_drop = 1.5;
+  try {
+    options.Check();
+    FAIL() << "no error";
+  } catch (const UsageError& error) {
+    EXPECT_NE(std::string(error.what()).find("retry_drop"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace confluent
