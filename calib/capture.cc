@@ -255,6 +255,12 @@ std::string Capture::BackgroundPath(int camera) const {
   return FindWithExtension(fs::path(root_) / "background" / rig_.cameras.at(camera).name, {".png", ".jpg", ".jpeg"});
 }
 
+const Image& AsRgb8(const Image& image, Image* storage) {
+  if (image.type == PixelType::kUInt8 && image.channels == 3) return image;
+  *storage = ToRgb8(image);
+  return *storage;
+}
+
 Image ToRgb8(const Image& image) {
   if (image.type == PixelType::kUInt8 && image.channels == 3) return image;
   Image rgb(image.width, image.height, 3);

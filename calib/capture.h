@@ -95,5 +95,8 @@ Image ReadMaskFile(const std::string& path);
 
 // Converts any 1-4 channel 8/16-bit/float image to 8-bit RGB.
 Image ToRgb8(const Image& image);
+// `image` itself when it is 8-bit RGB already, else its ToRgb8 conversion kept in `storage`
+// (the common case costs no full-frame copy).
+const Image& AsRgb8(const Image& image, Image* storage);
 
 }  // namespace confluent

@@ -149,27 +149,22 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
     if (options.plate_claim_inside_hull && !views.empty())
       ParallelFor(num_cameras, options.threads, [&](int c) {
         if (excluded(c) || extractors[c]->info().method != SilhouetteMethod::kPlate || hulls[c].empty()) return;
-        Image converted;  // only when the frame is not 8-bit RGB already
-        const bool rgb8 = images[c].type == PixelType::kUInt8 && images[c].channels == 3;
-        const Image& rgb = rgb8 ? images[c] : (converted = ToRgb8(images[c]));
+        Image converted;
+        const Image& rgb = AsRgb8(images[c], &converted);
         const int added = ClaimHighlightsInsideHull(&masks[c], rgb, extractors[c]->model(), hulls[c], multiview);
         if (added > 0) views[c].added += added + ReplaceMask(&masks[c], CleanMask(masks[c], options.cleanup));
       });
-    if (options.grabcut_learned && !views.empty())
+    // Cameras without a plate: the graph cut, then the feet it took for the floor's shadow.
+    if ((options.grabcut_learned || options.feet.enabled) && !views.empty())
       ParallelFor(num_cameras, options.threads, [&](int c) {
         if (!correct[c] || extractors[c]->info().method != SilhouetteMethod::kLearned) return;
-        views[c].added += ReplaceMask(
-            &masks[c], CleanMask(RefineMaskGrabCut(ToRgb8(images[c]), masks[c], strict_hulls[c], options.grabcut),
-                                 options.cleanup));
-      });
-    if (options.feet.enabled && !views.empty())
-      ParallelFor(num_cameras, options.threads, [&](int c) {
-        if (!correct[c] || extractors[c]->info().method != SilhouetteMethod::kLearned) return;
-        Image converted;  // only when the frame is not 8-bit RGB already
-        const bool rgb8 = images[c].type == PixelType::kUInt8 && images[c].channels == 3;
-        const int added = RestoreFeetBelowHull(&masks[c], rgb8 ? images[c] : (converted = ToRgb8(images[c])),
-                                               capture.rig().cameras[c], underside, extractors[c]->model(),
-                                               options.feet);
+        Image converted;
+        const Image& rgb = AsRgb8(images[c], &converted);
+        if (options.grabcut_learned)
+          views[c].added += ReplaceMask(
+              &masks[c], CleanMask(RefineMaskGrabCut(rgb, masks[c], strict_hulls[c], options.grabcut), options.cleanup));
+        const int added = RestoreFeetBelowHull(&masks[c], rgb, capture.rig().cameras[c], underside,
+                                               extractors[c]->model(), options.feet);
         if (added > 0) views[c].added += added + ReplaceMask(&masks[c], CleanMask(masks[c], options.cleanup));
       });
     for (int c = 0; c < num_cameras; ++c) {

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <string>
 
+#include <opencv2/imgproc.hpp>
+
 #include "core/cv_interop.h"
 #include "core/error.h"
 #include "silhouette/disk_morphology.h"
@@ -32,14 +34,15 @@ int RestoreFeetBelowHull(Image* mask, const Image& frame, const Camera& camera, 
   for (const Eigen::Vector3d& voxel : underside.lowest)
     if (voxel.z() <= options.max_height_m) low.lowest.push_back(voxel);
   if (low.lowest.empty()) return 0;
-  const Image columns =
-      ImageFromCvMat(DilateByDisk(AsCvMat(ProjectColumnsToFloor(camera, low)), ScaledRadius(options.reach, mask->width)));
+  const cv::Mat columns =
+      DilateByDisk(AsCvMat(ProjectColumnsToFloor(camera, low)), ScaledRadius(options.reach, mask->width));
+  const cv::Rect box = cv::boundingRect(columns);  // the feet's few pixels, not the whole frame
   const double min_cos = std::cos(options.min_chroma_angle_deg * M_PI / 180.0);
   int added = 0;
-  for (int y = 0; y < mask->height; ++y)
-    for (int x = 0; x < mask->width; ++x) {
+  for (int y = box.y; y < box.y + box.height; ++y)
+    for (int x = box.x; x < box.x + box.width; ++x) {
       std::uint8_t& out = mask->at<std::uint8_t>(x, y);
-      if (out != 0 || columns.at<std::uint8_t>(x, y) == 0) continue;
+      if (out != 0 || columns.at<std::uint8_t>(y, x) == 0) continue;
       if (model.ClassOf(frame, x, y) != PixelClass::kForeground) continue;
       const std::uint8_t* colour = &frame.at<std::uint8_t>(x, y);
       const Eigen::Vector3f mean = model.MeanAt(x, y);

@@ -245,10 +245,8 @@ SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const s
 
 Image SilhouetteExtractor::Extract(const Image& frame, int frame_index, MaskSummary* summary,
                                    const std::string& source) {
-  Image converted;  // only when the frame is not 8-bit RGB already (saves a full-frame copy)
-  const bool is_rgb8 = frame.type == PixelType::kUInt8 && frame.channels == 3;
-  if (!is_rgb8) converted = ToRgb8(frame);
-  const Image& rgb = is_rgb8 ? frame : converted;
+  Image converted;
+  const Image& rgb = AsRgb8(frame, &converted);
   if (rgb.width != width_ || rgb.height != height_)
     throw InputError(source, "frame is " + SizeText(rgb.width, rgb.height) + " but camera " + info_.name +
                                  " was set up for " + SizeText(width_, height_));
