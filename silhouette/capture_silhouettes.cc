@@ -155,9 +155,13 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         if (added > 0) views[c].added += added + ReplaceMask(&masks[c], CleanMask(masks[c], options.cleanup));
       });
     // Cameras without a plate: the graph cut, then the feet it took for the floor's shadow.
-    if ((options.grabcut_learned || options.feet.enabled) && !views.empty())
+    std::vector<Image> before_cut;
+    std::vector<char> cut(num_cameras, 0);  // written by the cameras' threads: not vector<bool>
+    if ((options.grabcut_learned || options.feet.enabled) && !views.empty()) {
+      before_cut = masks;
       ParallelFor(num_cameras, options.threads, [&](int c) {
         if (!correct[c] || extractors[c]->info().method != SilhouetteMethod::kLearned) return;
+        cut[c] = 1;
         Image converted;
         const Image& rgb = AsRgb8(images[c], &converted);
         if (options.grabcut_learned)
@@ -167,6 +171,19 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
                                                extractors[c]->model(), options.feet);
         if (added > 0) views[c].added += added + ReplaceMask(&masks[c], CleanMask(masks[c], options.cleanup));
       });
+    }
+    if (options.recheck_after_cut && std::find(cut.begin(), cut.end(), 1) != cut.end()) {
+      std::vector<Image> checked(num_cameras);  // excluded cameras: no mask
+      for (int c = 0; c < num_cameras; ++c)
+        if (!excluded(c)) checked[c] = masks[c];
+      const std::vector<int> removed = RemoveRefinementsTheOthersDoNotShare(
+          capture.rig(), before_cut, std::vector<bool>(cut.begin(), cut.end()), multiview, &checked);
+      for (int c = 0; c < num_cameras; ++c)
+        if (cut[c]) {
+          views[c].removed += removed[c];
+          masks[c] = std::move(checked[c]);
+        }
+    }
     for (int c = 0; c < num_cameras; ++c) {
       MaskSummary& check = checks[c];
       if (!views.empty()) {

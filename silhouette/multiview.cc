@@ -158,6 +158,31 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   return result;
 }
 
+std::vector<int> RemoveRefinementsTheOthersDoNotShare(const Rig& rig, const std::vector<Image>& before,
+                                                      const std::vector<bool>& refined, const MultiViewOptions& options,
+                                                      std::vector<Image>* masks) {
+  const std::size_t n = masks->size();
+  if (before.size() != n || refined.size() != n)
+    throw UsageError("RemoveRefinementsTheOthersDoNotShare: one mask before, and one switch, per camera");
+  for (std::size_t c = 0; c < n; ++c)
+    if (refined[c] && (before[c].width != (*masks)[c].width || before[c].height != (*masks)[c].height))
+      throw UsageError("RemoveRefinementsTheOthersDoNotShare: the masks before differ in size");
+  MultiViewOptions removal = options;
+  removal.hole_close = 0;  // nothing is filled
+  const std::vector<Image> after = *masks;
+  CheckMultiView(rig, masks, refined, removal);
+  std::vector<int> removed(n, 0);
+  for (std::size_t c = 0; c < n; ++c) {
+    if (!refined[c]) continue;
+    std::vector<std::uint8_t>& kept = (*masks)[c].data;
+    for (std::size_t i = 0; i < kept.size(); ++i) {
+      kept[i] |= after[c].data[i] & before[c].data[i];
+      removed[c] += after[c].data[i] != kept[i];
+    }
+  }
+  return removed;
+}
+
 Image ProjectColumnsToFloor(const Camera& camera, const HullUnderside& underside) {
   Image columns(camera.width, camera.height, 1);
   cv::Mat canvas = AsCvMat(columns);

@@ -58,6 +58,17 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
                                             std::vector<Image>* strict_hulls = nullptr,
                                             HullUnderside* underside = nullptr);
 
+// The masks after a refinement of some of them (the graph cut) checked against each other
+// again: what camera c's refinement added (in `masks[c]`, not in `before[c]`) beyond the hull
+// of the others' refined masks is removed (a poster in the shirt's colours beside the body,
+// which one camera's cut took); what the mask held before stays, and no hole is filled. A part
+// the first hull lacked but most cameras' refinements put back (a shirt of the wall's colour)
+// is in the new hull and stays. `masks` and `before` as CheckMultiView's masks (empty for
+// cameras kept out); only cameras with `refined[c]` change. Returns the pixels removed per camera.
+std::vector<int> RemoveRefinementsTheOthersDoNotShare(const Rig& rig, const std::vector<Image>& before,
+                                                      const std::vector<bool>& refined, const MultiViewOptions& options,
+                                                      std::vector<Image>* masks);
+
 // What lies below a hull down to the floor (z = 0), seen by `camera` (1-channel 0/255): each
 // column of `underside` drawn as a segment from its lowest voxel to the floor, a voxel wide. A
 // standing person's feet lie there even when every camera's mask loses them against their

@@ -72,6 +72,10 @@ struct SilhouetteOptions {
   // After it, dark feet that the graph cut took for the floor's shadow are put back from below
   // the other cameras' hull (silhouette/feet_restore.h); cameras without a plate only.
   FeetRestoreOptions feet;
+  // Then the masks are checked against each other again, and what a camera's cut added beyond
+  // the hull of the others' refined masks is removed (a poster in the shirt's colours beside the
+  // body); what the mask held before the cut stays.
+  bool recheck_after_cut = true;
   // Worker threads for a capture (cameras are processed in parallel).
   int threads = 2;
   // Throws UsageError naming the bad field (also of the nested options).

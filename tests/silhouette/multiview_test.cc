@@ -105,6 +105,42 @@ TEST(MultiView, CorrectionRemovesAGhostAndFillsAHoleWhereTheOthersAgree) {
   for (int c : {0, 1, 2, 4, 5, 6, 7}) EXPECT_EQ(Iou(masks[c], truth[c]), 1.0);  // not asked to correct
 }
 
+// After a per-camera refinement (the graph cut): a poster that one camera's cut added beside the
+// body goes, a head that every camera's cut put back stays (the first hull lacked it), and a
+// part the mask held before the cut is not touched.
+TEST(MultiView, RefinementsTheOtherCamerasDoNotShareAreRemoved) {
+  const Rig rig = testing::MakeRingRig(8, 160, 120);
+  const auto actor = testing::MakeActor(0.0, 0.0, 0.3);
+  std::vector<Image> truth;
+  for (const Camera& camera : rig.cameras) truth.push_back(testing::RenderMask(camera, actor));
+  const auto head = std::vector<testing::Ellipsoid>{actor[3]};
+  std::vector<Image> before = truth, masks = truth;
+  for (int c = 0; c < 8; ++c) {  // every mask lost the head before the cut; the cut put it back
+    const Image head_mask = testing::RenderMask(rig.cameras[c], head);
+    for (std::size_t i = 0; i < head_mask.data.size(); ++i)
+      if (head_mask.data[i]) before[c].data[i] = 0;
+  }
+  Fill(&masks[3], 5, 60, 25, 100, 255);   // cam3: a poster that its cut added
+  Fill(&before[5], 5, 60, 25, 100, 255);  // cam5: a part held before the cut
+  Fill(&masks[5], 5, 60, 25, 100, 255);
+  const Image expected5 = masks[5];
+  std::vector<bool> refined(8, true);
+  const std::vector<int> removed =
+      RemoveRefinementsTheOthersDoNotShare(rig, before, refined, MultiViewOptions{}, &masks);
+  EXPECT_EQ(removed[3], 20 * 40);
+  EXPECT_EQ(masks[3].at<std::uint8_t>(15, 80), 0);
+  EXPECT_EQ(masks[5].at<std::uint8_t>(15, 80), 255);
+  EXPECT_EQ(removed[5], 0);
+  for (int c = 0; c < 8; ++c) EXPECT_EQ(Iou(masks[c], c == 5 ? expected5 : truth[c]), 1.0) << "camera " << c;
+  // The rule applies to refined cameras only, and sizes are checked.
+  std::vector<Image> again = truth;
+  Fill(&again[3], 5, 60, 25, 100, 255);
+  EXPECT_EQ(RemoveRefinementsTheOthersDoNotShare(rig, truth, std::vector<bool>(8, false), MultiViewOptions{}, &again)[3],
+            0);
+  EXPECT_EQ(again[3].at<std::uint8_t>(15, 80), 255);
+  EXPECT_THROW(RemoveRefinementsTheOthersDoNotShare(rig, {}, refined, MultiViewOptions{}, &again), UsageError);
+}
+
 // A clean plate's mask misses actor pixels that look like a brighter background (skin over a
 // beige floor): where the other cameras' hull holds the actor, such highlights are claimed;
 // shadows (the actor's own, on the floor) and highlights away from the actor are not.
