@@ -245,6 +245,9 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
         for (int z = 0; z < grid.size.z(); ++z)
           if (rejections[grid.Index(x, y, z)] <= allowed) {
             underside->lowest.push_back(grid.Center(x, y, z));
+            int top = grid.size.z() - 1;
+            while (rejections[grid.Index(x, y, top)] > allowed) --top;
+            underside->highest.push_back(grid.Center(x, y, top));
             break;
           }
   }

@@ -54,11 +54,12 @@ struct VisualHullOptions {
   void Check() const;
 };
 
-// The hull seen from below: the centre of the lowest voxel of each vertical (z) column of voxels
-// that holds any, and the voxel size.
+// The hull seen from below (and from above): the centre of the lowest (highest) voxel of each
+// vertical (z) column of voxels that holds any, and the voxel size.
 struct HullUnderside {
   double voxel_m = 0;
   std::vector<Eigen::Vector3d> lowest;
+  std::vector<Eigen::Vector3d> highest;  // of the same columns
 };
 
 // Visual-hull consistency: for each camera in `targets` (all cameras when empty), carve a

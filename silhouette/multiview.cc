@@ -183,22 +183,42 @@ std::vector<int> RemoveRefinementsTheOthersDoNotShare(const Rig& rig, const std:
   return removed;
 }
 
-Image ProjectColumnsToFloor(const Camera& camera, const HullUnderside& underside) {
-  Image columns(camera.width, camera.height, 1);
-  cv::Mat canvas = AsCvMat(columns);
+namespace {
+
+// Vertical segments (from, to) drawn into `camera`'s view (1-channel 0/255), each a voxel wide.
+Image DrawVerticalSegments(const Camera& camera, double voxel_m,
+                           const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& segments) {
+  Image drawn(camera.width, camera.height, 1);
+  cv::Mat canvas = AsCvMat(drawn);
   const double focal = 0.5 * (camera.K(0, 0) + camera.K(1, 1));
-  for (const Eigen::Vector3d& top : underside.lowest) {
-    if (top.z() <= 0) continue;
-    const Eigen::Vector3d floor(top.x(), top.y(), 0.0);
+  for (const auto& [from, to] : segments) {
     Eigen::Vector2d a, b;
-    if (!camera.ProjectChecked(top, &a) || !camera.ProjectChecked(floor, &b)) continue;
-    const double depth = std::min(camera.PointInCamera(top).z(), camera.PointInCamera(floor).z());
-    const int width = std::max(1, static_cast<int>(std::lround(focal * underside.voxel_m / depth)));
+    if (!camera.ProjectChecked(from, &a) || !camera.ProjectChecked(to, &b)) continue;
+    const double depth = std::min(camera.PointInCamera(from).z(), camera.PointInCamera(to).z());
+    const int width = std::max(1, static_cast<int>(std::lround(focal * voxel_m / depth)));
     cv::line(canvas, cv::Point(static_cast<int>(std::lround(a.x())), static_cast<int>(std::lround(a.y()))),
              cv::Point(static_cast<int>(std::lround(b.x())), static_cast<int>(std::lround(b.y()))), cv::Scalar(255),
              width);
   }
-  return columns;
+  return drawn;
+}
+
+}  // namespace
+
+Image ProjectColumnsToFloor(const Camera& camera, const HullUnderside& underside) {
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> segments;
+  for (const Eigen::Vector3d& top : underside.lowest)
+    if (top.z() > 0) segments.emplace_back(top, Eigen::Vector3d(top.x(), top.y(), 0.0));
+  return DrawVerticalSegments(camera, underside.voxel_m, segments);
+}
+
+Image ProjectColumnsAboveTop(const Camera& camera, const HullUnderside& hull, double near_top_m, double height_m) {
+  double top = -1e30;
+  for (const Eigen::Vector3d& p : hull.highest) top = std::max(top, p.z());
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> segments;
+  for (const Eigen::Vector3d& p : hull.highest)
+    if (p.z() >= top - near_top_m) segments.emplace_back(p, p + Eigen::Vector3d(0, 0, height_m));
+  return DrawVerticalSegments(camera, hull.voxel_m, segments);
 }
 
 int ClaimHighlightsInsideHull(Image* mask, const Image& frame, const BackgroundModel& model, const Image& hull,

@@ -75,6 +75,12 @@ std::vector<int> RemoveRefinementsTheOthersDoNotShare(const Rig& rig, const std:
 // shadow.
 Image ProjectColumnsToFloor(const Camera& camera, const HullUnderside& underside);
 
+// What lies above the top of a hull, seen by `camera` (1-channel 0/255): the columns whose
+// highest voxel is within `near_top_m` of the hull's highest, continued `height_m` upwards. A
+// performer who hardly moves has a head that every camera's mask may lose (it stays in the
+// learned background), so that the hull ends at the shoulders.
+Image ProjectColumnsAboveTop(const Camera& camera, const HullUnderside& hull, double near_top_m, double height_m);
+
 // Claims for `mask` (1-channel 0/255, made with `model` from a clean plate) the pixels of
 // `frame` (8-bit RGB) that the model calls a highlight of the background where `hull` (the
 // other cameras' projected hull, closed and eroded by options.hole_margin) says the actor is:

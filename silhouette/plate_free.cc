@@ -17,6 +17,9 @@ void PlateFreeOptions::Check() const {
   RequireOption(iterations >= 0 && iterations <= 10, owner + "iterations", iterations, "in [0, 10]");
   RequireOption(occupancy_margin >= 0 && occupancy_margin <= 200, owner + "occupancy_margin", occupancy_margin,
                 "in [0, 200]");
+  RequireOption(head_room_m >= 0 && head_room_m <= 2, owner + "head_room_m", head_room_m, "in [0, 2]");
+  RequireOption(head_room_near_top_m >= 0 && head_room_near_top_m <= 2, owner + "head_room_near_top_m",
+                head_room_near_top_m, "in [0, 2]");
   RequireOption(background_colour > 0.5 && background_colour <= 1, owner + "background_colour", background_colour,
                 "in (0.5, 1]");
   RequireOption(nearest_tolerance > 0 && nearest_tolerance <= 100, owner + "nearest_tolerance", nearest_tolerance,
@@ -190,6 +193,12 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
         // only where they move (a shirt, the arms), but their legs and feet are below.
         if (options.columns_to_floor)
           cv::bitwise_or(occupancy, AsCvMat(ProjectColumnsToFloor(rig.cameras[c], underside)), occupancy);
+        // And the room above the hull's top: a still head that every camera's mask loses.
+        if (options.head_room_m > 0)
+          cv::bitwise_or(occupancy,
+                         AsCvMat(ProjectColumnsAboveTop(rig.cameras[c], underside, options.head_room_near_top_m,
+                                                        options.head_room_m)),
+                         occupancy);
         occupied[c][k] = ImageFromCvMat(Grow(occupancy, options.occupancy_margin));
         // Colour samples: the actor where the mask and the hull agree (eroded), the background
         // well away from both.

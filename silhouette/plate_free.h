@@ -27,6 +27,12 @@ struct PlateFreeOptions {
   // The occupancy also takes what lies below the hull down to the floor (z = 0): the legs of a
   // performer who hardly moves, whom the masks find only where they move.
   bool columns_to_floor = true;
+  // And what lies above the hull's top: the columns whose highest voxel is within
+  // `head_room_near_top_m` of the hull's highest, continued `head_room_m` upwards (0 = off). A
+  // performer who hardly moves keeps their head in every camera's first background, so that
+  // the masks lose it and the hull ends at the shoulders.
+  double head_room_m = 0.30;
+  double head_room_near_top_m = 0.25;
   // A pixel the actor may cover (its samples differ from the median) takes the samples within
   // this many noise sigmas (plus 4% of the colour's brightness) of the nearest sample to the
   // inpainted background.
