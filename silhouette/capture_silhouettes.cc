@@ -175,14 +175,14 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
     if (options.recheck_after_cut && std::find(cut.begin(), cut.end(), 1) != cut.end()) {
       std::vector<Image> checked(num_cameras);  // excluded cameras: no mask
       for (int c = 0; c < num_cameras; ++c)
-        if (!excluded(c)) checked[c] = masks[c];
+        if (!excluded(c)) checked[c] = std::move(masks[c]);
       const std::vector<int> removed = RemoveRefinementsTheOthersDoNotShare(
           capture.rig(), before_cut, std::vector<bool>(cut.begin(), cut.end()), multiview, &checked);
-      for (int c = 0; c < num_cameras; ++c)
-        if (cut[c]) {
-          views[c].removed += removed[c];
-          masks[c] = std::move(checked[c]);
-        }
+      for (int c = 0; c < num_cameras; ++c) {
+        if (excluded(c)) continue;
+        views[c].removed += removed[c];
+        masks[c] = std::move(checked[c]);
+      }
     }
     for (int c = 0; c < num_cameras; ++c) {
       MaskSummary& check = checks[c];

@@ -29,8 +29,8 @@ struct FeetRestoreOptions {
 // Adds to `mask` (1-channel 0/255 of `camera`) the pixels of `frame` (8-bit RGB) in the columns
 // from `underside`'s low voxels down to the floor (ProjectColumnsToFloor, widened by
 // options.reach) that `model` (of the frame's size) classes as foreground and whose colour
-// differs in direction from the model's mean. Returns the number of pixels added (0 when disabled). Throws UsageError when the sizes
-// differ.
+// differs in direction from the model's mean. Returns the number of pixels added (0 when
+// disabled). Throws UsageError when the sizes differ.
 int RestoreFeetBelowHull(Image* mask, const Image& frame, const Camera& camera, const HullUnderside& underside,
                          const BackgroundModel& model, const FeetRestoreOptions& options);
 

@@ -26,6 +26,56 @@ void MultiViewOptions::Check() const {
   RequireOption(threads >= 1, owner + "threads", threads, ">= 1");
 }
 
+namespace {
+
+// The number of cameras with a mask; throws InputError naming a camera whose mask differs in
+// size from its calibration.
+int CountMasks(const Rig& rig, const std::vector<Image>& masks) {
+  int with_mask = 0;
+  for (int c = 0; c < rig.size(); ++c) {
+    const Image& mask = masks[c];
+    if (mask.empty()) continue;
+    if (mask.width != rig.cameras[c].width || mask.height != rig.cameras[c].height || mask.channels != 1)
+      throw InputError(rig.cameras[c].name, "mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) +
+                                                " but the calibration says " + std::to_string(rig.cameras[c].width) +
+                                                "x" + std::to_string(rig.cameras[c].height));
+    ++with_mask;
+  }
+  return with_mask;
+}
+
+// Each camera's projected tolerant hull of the others (one camera's hole does not carve it).
+// Cameras without a mask, or with an empty one (the actor is in every camera's view), constrain
+// nothing: a full mask. `carving` and `hull_options` receive what was carved with.
+std::vector<Image> ToleratedHulls(const Rig& rig, const std::vector<Image>& masks, int with_mask,
+                                  const MultiViewOptions& options, std::vector<Image>* carving,
+                                  VisualHullOptions* hull_options, HullUnderside* underside) {
+  const int n = rig.size();
+  carving->assign(n, Image());
+  for (int c = 0; c < n; ++c) {
+    (*carving)[c] = masks[c];
+    if ((*carving)[c].empty() || cv::countNonZero(AsCvMat((*carving)[c])) == 0) {
+      (*carving)[c] = Image(rig.cameras[c].width, rig.cameras[c].height, 1);
+      std::fill((*carving)[c].data.begin(), (*carving)[c].data.end(), 255);
+    }
+  }
+  hull_options->grid_resolution = options.grid_resolution;
+  hull_options->threads = options.threads;
+  hull_options->tolerated_rejections =
+      options.tolerated_rejections >= 0 ? options.tolerated_rejections : (with_mask - 1 >= 4 ? 1 : 0);
+  std::vector<Image> projected;
+  VisualHullConsistency(rig, *carving, {}, *hull_options, &projected, underside);
+  return projected;
+}
+
+// `hull` grown by the ghost margin: mask pixels outside it are ghosts.
+cv::Mat NearHull(const cv::Mat& hull, const MultiViewOptions& options) {
+  const int radius = ScaledRadius(options.ghost_margin, hull.cols);
+  return radius > 0 ? DilateByDisk(hull, radius) : hull;
+}
+
+}  // namespace
+
 std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* masks, const std::vector<bool>& correct,
                                             const MultiViewOptions& options, std::vector<Image>* hulls,
                                             std::vector<Image>* strict_hulls, HullUnderside* underside) {
@@ -38,47 +88,22 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   std::vector<ViewConsistency> result(n);
   if (hulls != nullptr) hulls->assign(n, Image());
   if (strict_hulls != nullptr) strict_hulls->assign(n, Image());
-  int with_mask = 0;
-  for (int c = 0; c < n; ++c) {
-    const Image& mask = (*masks)[c];
-    if (mask.empty()) continue;
-    if (mask.width != rig.cameras[c].width || mask.height != rig.cameras[c].height || mask.channels != 1)
-      throw InputError(rig.cameras[c].name, "mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) +
-                                                " but the calibration says " + std::to_string(rig.cameras[c].width) +
-                                                "x" + std::to_string(rig.cameras[c].height));
-    ++with_mask;
-  }
+  const int with_mask = CountMasks(rig, *masks);
   if (with_mask < 3) {
     for (ViewConsistency& view : result) view.explained = view.covered = view.confidence = 1;
     return result;
   }
-  // Cameras without a mask, or with an empty one (the actor is in every camera's view), constrain
-  // nothing: a full mask.
-  std::vector<Image> carving(n);
-  for (int c = 0; c < n; ++c) {
-    carving[c] = (*masks)[c];
-    if (carving[c].empty() || cv::countNonZero(AsCvMat(carving[c])) == 0) {
-      carving[c] = Image(rig.cameras[c].width, rig.cameras[c].height, 1);
-      std::fill(carving[c].data.begin(), carving[c].data.end(), 255);
-    }
-  }
   // Ghosts are judged against a tolerant hull (one camera's hole does not carve it); coverage and
   // holes against a strict one (tighter where the silhouettes have concavities) carved by the
   // cameras whose masks that hull explains (a shifted mask would carve it away).
+  std::vector<Image> carving, strict;
   VisualHullOptions hull_options;
-  hull_options.grid_resolution = options.grid_resolution;
-  hull_options.threads = options.threads;
-  hull_options.tolerated_rejections =
-      options.tolerated_rejections >= 0 ? options.tolerated_rejections : (with_mask - 1 >= 4 ? 1 : 0);
-  std::vector<Image> projected, strict;
-  VisualHullConsistency(rig, carving, {}, hull_options, &projected, underside);
+  std::vector<Image> projected = ToleratedHulls(rig, *masks, with_mask, options, &carving, &hull_options, underside);
   std::vector<cv::Mat> near_hulls(n);
   std::vector<double> explained(n, 1.0), explained_area(n, 0.0), explained_list;
   for (int c = 0; c < n; ++c) {
     if ((*masks)[c].empty()) continue;
-    const cv::Mat hull = AsCvMat(projected[c]);
-    const int radius = ScaledRadius(options.ghost_margin, (*masks)[c].width);
-    near_hulls[c] = radius > 0 ? DilateByDisk(hull, radius) : hull;
+    near_hulls[c] = NearHull(AsCvMat(projected[c]), options);
     const cv::Mat m = AsCvMat((*masks)[c]);
     cv::Mat both;
     cv::bitwise_and(m, near_hulls[c], both);
@@ -162,23 +187,24 @@ std::vector<int> RemoveRefinementsTheOthersDoNotShare(const Rig& rig, const std:
                                                       const std::vector<bool>& refined, const MultiViewOptions& options,
                                                       std::vector<Image>* masks) {
   const std::size_t n = masks->size();
-  if (before.size() != n || refined.size() != n)
-    throw UsageError("RemoveRefinementsTheOthersDoNotShare: one mask before, and one switch, per camera");
+  if (static_cast<int>(n) != rig.size() || before.size() != n || refined.size() != n)
+    throw UsageError("RemoveRefinementsTheOthersDoNotShare: one mask, one mask before and one switch per camera");
   for (std::size_t c = 0; c < n; ++c)
     if (refined[c] && (before[c].width != (*masks)[c].width || before[c].height != (*masks)[c].height))
       throw UsageError("RemoveRefinementsTheOthersDoNotShare: the masks before differ in size");
-  MultiViewOptions removal = options;
-  removal.hole_close = 0;  // nothing is filled
-  const std::vector<Image> after = *masks;
-  CheckMultiView(rig, masks, refined, removal);
+  options.Check();
   std::vector<int> removed(n, 0);
+  const int with_mask = CountMasks(rig, *masks);
+  if (with_mask < 3) return removed;
+  std::vector<Image> carving;
+  VisualHullOptions hull_options;
+  const std::vector<Image> hulls = ToleratedHulls(rig, *masks, with_mask, options, &carving, &hull_options, nullptr);
   for (std::size_t c = 0; c < n; ++c) {
-    if (!refined[c]) continue;
-    std::vector<std::uint8_t>& kept = (*masks)[c].data;
-    for (std::size_t i = 0; i < kept.size(); ++i) {
-      kept[i] |= after[c].data[i] & before[c].data[i];
-      removed[c] += after[c].data[i] != kept[i];
-    }
+    if (!refined[c] || (*masks)[c].empty() || cv::countNonZero(AsCvMat(hulls[c])) == 0) continue;
+    const cv::Mat near = NearHull(AsCvMat(hulls[c]), options);
+    std::vector<std::uint8_t>& mask = (*masks)[c].data;
+    for (std::size_t i = 0; i < mask.size(); ++i)
+      if (mask[i] && !near.data[i] && !before[c].data[i]) mask[i] = 0, ++removed[c];
   }
   return removed;
 }
