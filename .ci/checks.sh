@@ -15,8 +15,10 @@ step() {
 # The plate-free silhouette tests (issue 20) are among them: 4 to 7.5 min each sanitized.
 heavy='^(SambaRealMotion|SilhouetteFit|SkirtFit|LimbRecovery|ScanCorrespondence|ScanRegistration|Calibrate|RealSilhouettes|RealCheckerboard|CorrespondencePlacement|TemplateMotion|TrackCommand|PlateFree)\.|^SilhouettesCli\.(TinySynthCapture|WithoutAnyPlate|RunWarnsBefore)'
 step ./dev test --sanitize -L unit -E "$heavy"
-step ./dev fuzz --seconds 30 --seed 1
-step ./dev demo --preset tiny --out /tmp/confluent-ci-demo
+step ./dev fuzz --seconds 15 --seed 1
+# The release build (its own step, for its time). The demo itself runs in ./dev test below
+# (DemoCommand.TinyPresetRunsThePipelineAndReports runs `confluent demo --preset tiny`).
+step ./dev build
 # The motion suite's tiny variant: fails when a capture falls below bench/suite_floors_tiny.json.
 step ./dev suite --preset tiny --check --out /tmp/confluent-ci-suite
 step ./dev test
