@@ -240,6 +240,9 @@ std::vector<double> VisualHullConsistency(const Rig& rig, const std::vector<Imag
 
   if (underside != nullptr) {
     underside->voxel_m = grid.voxel_m;
+    const long kept = std::count_if(rejections.begin(), rejections.end(),
+                                    [tolerated](std::uint8_t count) { return count <= tolerated; });
+    underside->volume_m3 = static_cast<double>(kept) * grid.voxel_m * grid.voxel_m * grid.voxel_m;
     for (int y = 0; y < grid.size.y(); ++y)
       for (int x = 0; x < grid.size.x(); ++x)
         for (int z = 0; z < grid.size.z(); ++z)

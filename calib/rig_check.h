@@ -60,6 +60,9 @@ struct HullUnderside {
   double voxel_m = 0;
   std::vector<Eigen::Vector3d> lowest;
   std::vector<Eigen::Vector3d> highest;  // of the same columns
+  // The volume of the hull that every source camera carves (a voxel stays when at most
+  // tolerated_rejections of them reject it), cubic metres.
+  double volume_m3 = 0;
 };
 
 // Visual-hull consistency: for each camera in `targets` (all cameras when empty), carve a

@@ -54,6 +54,7 @@ nlohmann::json SummaryJson(const Capture& capture, const SilhouetteSummary& summ
                              {"area_jump", mask.area_jump},
                              {"fragmented", mask.fragmented},
                              {"hull_explained", mask.hull_explained},
+                             {"hull_volume_m3", mask.hull_volume_m3},
                              {"hull_covered", mask.hull_covered},
                              {"corrected_pixels", mask.corrected_pixels},
                              {"confidence", mask.confidence},

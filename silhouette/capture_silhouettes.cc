@@ -198,6 +198,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         }
         check.hull_explained = view.explained;
         check.hull_covered = view.covered;
+        check.hull_volume_m3 = view.hull_volume_m3;
         check.corrected_pixels = view.added + view.removed;
         check.confidence = view.confidence;
       }
@@ -207,7 +208,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
       if (check.empty) check.confidence = 0;
       check.low_confidence = check.confidence < multiview.min_confidence;
       summary.masks[static_cast<std::size_t>(c) * num_frames + (f - first_frame)] = check;
-      if (f >= resume(c) && !excluded(c)) confidences.push_back({c, f, check.confidence});
+      if (f >= resume(c) && !excluded(c)) confidences.push_back({c, f, check.confidence, check.hull_volume_m3});
     }
     ParallelFor(num_cameras, options.threads, [&](int c) {
       if (f < resume(c)) return;
@@ -220,7 +221,8 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
   summary.warnings = capture.warnings();  // what opening the capture adjusted (sensor padding)
   for (const CameraSilhouetteInfo& info : summary.cameras)
     for (const std::string& warning : info.warnings) summary.warnings.push_back(info.name + ": " + warning);
-  summary.trust = SummarizeMaskTrust(capture.rig(), confidences, multiview.min_confidence);
+  summary.trust =
+      SummarizeMaskTrust(capture.rig(), confidences, multiview.min_confidence, multiview.max_hull_volume_m3);
   if (!summary.trust.warning.empty()) summary.warnings.push_back(summary.trust.warning);
   return summary;
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <set>
 #include <opencv2/imgproc.hpp>
 
 #include "core/statistics.h"
@@ -23,6 +24,7 @@ void MultiViewOptions::Check() const {
   RequireOption(hole_margin >= 0 && hole_margin <= 100, owner + "hole_margin", hole_margin, "in [0, 100]");
   RequireOption(hole_close >= 0 && hole_close <= 200, owner + "hole_close", hole_close, "in [0, 200]");
   RequireOption(min_confidence >= 0 && min_confidence <= 1, owner + "min_confidence", min_confidence, "in [0, 1]");
+  RequireOption(max_hull_volume_m3 >= 0, owner + "max_hull_volume_m3", max_hull_volume_m3, ">= 0");
   RequireOption(threads >= 1, owner + "threads", threads, ">= 1");
 }
 
@@ -80,7 +82,9 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
                                             const MultiViewOptions& options, std::vector<Image>* hulls,
                                             std::vector<Image>* strict_hulls, HullUnderside* underside) {
   options.Check();
-  if (underside != nullptr) *underside = HullUnderside();
+  HullUnderside own_underside;  // the volume is needed even when the caller wants no underside
+  if (underside == nullptr) underside = &own_underside;
+  *underside = HullUnderside();
   const int n = rig.size();
   if (static_cast<int>(masks->size()) != n) throw UsageError("CheckMultiView: one mask (or an empty image) per camera");
   if (!correct.empty() && static_cast<int>(correct.size()) != n)
@@ -168,12 +172,19 @@ std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* 
   // A hull is larger than the silhouette (concavities, few cameras): coverage counts relative to
   // the frame's typical camera.
   const double typical = covered_list.empty() ? 1.0 : std::max(0.5, Median(covered_list));
+  // Masks can agree with each other and still hold background: then the hull is no person's.
+  const double volume = underside->volume_m3;
+  const double plausible = options.max_hull_volume_m3 > 0 && volume > options.max_hull_volume_m3
+                               ? options.max_hull_volume_m3 / volume
+                               : 1.0;
   for (int c = 0; c < n; ++c) {
     if ((*masks)[c].empty()) continue;
     ViewConsistency& view = result[c];
+    view.hull_volume_m3 = volume;
     view.confidence = view.explained <= 0 ? 0.0
-                                          : std::clamp(std::min(view.explained / typical_explained, view.covered / typical),
-                                                       0.0, 1.0);
+                                          : plausible * std::clamp(std::min(view.explained / typical_explained,
+                                                                            view.covered / typical),
+                                                                   0.0, 1.0);
   }
   for (int c = 0; c < n; ++c) {
     if ((*masks)[c].empty()) continue;
@@ -281,18 +292,21 @@ int ClaimHighlightsInsideHull(Image* mask, const Image& frame, const BackgroundM
 }
 
 MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<CameraFrameConfidence>& confidences,
-                             double min_confidence) {
+                             double min_confidence, double max_hull_volume_m3) {
   const int n = rig.size();
   MaskTrust trust;
   std::vector<double> sum(n, 0.0);
   std::vector<int> count(n, 0);
   double total = 0;
+  std::set<int> oversized;
   trust.checked = confidences;
   for (const CameraFrameConfidence& entry : confidences) {
     const int camera = entry.camera;
     const double confidence = entry.confidence;
     if (camera < 0 || camera >= n) throw UsageError("SummarizeMaskTrust: camera index out of range");
     ++trust.camera_frames;
+    trust.largest_hull_m3 = std::max(trust.largest_hull_m3, entry.hull_volume_m3);
+    if (max_hull_volume_m3 > 0 && entry.hull_volume_m3 > max_hull_volume_m3) oversized.insert(entry.frame);
     trust.low_confidence += confidence < min_confidence;
     sum[camera] += confidence;
     ++count[camera];
@@ -309,6 +323,7 @@ MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<CameraFrameConfid
       worst = rig.cameras[c].name;
     }
   }
+  trust.oversized_hull_frames = static_cast<int>(oversized.size());
   if (trust.camera_frames == 0) return trust;
   trust.mean_confidence = total / trust.camera_frames;
   if (trust.low_confidence * 10 > trust.camera_frames || worst_value < min_confidence) {
@@ -320,6 +335,13 @@ MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<CameraFrameConfid
                   trust.low_confidence, trust.camera_frames, min_confidence, trust.mean_confidence, worst.c_str(),
                   worst_value);
     trust.warning = text;
+    if (trust.oversized_hull_frames > 0) {
+      std::snprintf(text, sizeof text,
+                    "; in %d frame(s) the masks carve a visual hull of up to %.2f m^3, more than one person's (%.2f): "
+                    "several cameras hold the same background (floor, walls)",
+                    trust.oversized_hull_frames, trust.largest_hull_m3, max_hull_volume_m3);
+      trust.warning += text;
+    }
   }
   return trust;
 }
@@ -334,9 +356,9 @@ MaskTrust AssessMaskTrust(const Rig& rig, const std::vector<int>& frames,
     for (int c = 0; c < n; ++c) masks[c] = read_mask(c, frame);
     const std::vector<ViewConsistency> views = CheckMultiView(rig, &masks, {}, options);
     for (int c = 0; c < n; ++c)
-      if (!masks[c].empty()) confidences.push_back({c, frame, views[c].confidence});
+      if (!masks[c].empty()) confidences.push_back({c, frame, views[c].confidence, views[c].hull_volume_m3});
   }
-  return SummarizeMaskTrust(rig, confidences, options.min_confidence);
+  return SummarizeMaskTrust(rig, confidences, options.min_confidence, options.max_hull_volume_m3);
 }
 
 }  // namespace confluent

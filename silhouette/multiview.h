@@ -32,6 +32,11 @@ struct MultiViewOptions {
   double hole_close = 40.0;
   // A camera-frame whose confidence is below this is flagged.
   double min_confidence = 0.8;
+  // The largest hull (of every camera's mask) one person may carve, cubic metres: a person is
+  // about 0.07, their hull from 4 cameras a few times that. Masks that hold the same background
+  // (a platform, a wall) in several cameras agree with each other and carve a hull far larger;
+  // every camera's confidence is then scaled by this over the hull's volume. 0 = no limit.
+  double max_hull_volume_m3 = 1.0;
   int threads = 1;  // the visual hulls are carved on this many threads (the same result)
   // Throws UsageError naming the bad field.
   void Check() const;
@@ -44,6 +49,7 @@ struct ViewConsistency {
   double confidence = 0;  // min(explained, covered / the frame's median covered), in [0, 1]; 0 for an empty mask
   int added = 0;          // pixels filled by the correction
   int removed = 0;        // pixels removed by the correction
+  double hull_volume_m3 = 0;  // of the frame's hull of every camera's mask (the same for every camera)
 };
 
 // Checks each camera's mask of one frame (`masks[i]`: 1-channel 0/255 of rig camera i, or empty
@@ -51,7 +57,8 @@ struct ViewConsistency {
 // others, and corrects the masks of the cameras with `correct[i]` (empty: none). Needs 3 or more
 // cameras with masks; with fewer every confidence is 1 and nothing changes. `hulls`, if given,
 // receives each camera's projected tolerant hull of the others (empty for cameras without a
-// mask), `strict_hulls` the strict one, `underside` the underside of the tolerant hulls.
+// mask), `strict_hulls` the strict one, `underside` the underside of the tolerant hulls. A hull
+// larger than options.max_hull_volume_m3 lowers every camera's confidence.
 // Throws InputError naming the camera whose mask differs in size from its calibration.
 std::vector<ViewConsistency> CheckMultiView(const Rig& rig, std::vector<Image>* masks, const std::vector<bool>& correct,
                                             const MultiViewOptions& options, std::vector<Image>* hulls = nullptr,
@@ -96,6 +103,7 @@ struct CameraFrameConfidence {
   int camera = 0;  // rig index
   int frame = 0;
   double confidence = 1;
+  double hull_volume_m3 = 0;  // of the frame's hull of every camera (0: not known)
 };
 
 struct MaskTrust {
@@ -104,19 +112,22 @@ struct MaskTrust {
   int low_confidence = 0;                // of them below options.min_confidence
   double mean_confidence = 1;
   std::vector<double> camera_confidence;  // mean per camera (rig order; 1 for cameras not checked)
+  int oversized_hull_frames = 0;  // frames whose hull is larger than one person's
+  double largest_hull_m3 = 0;     // the largest hull of the checked frames
   // "" when the masks look fine, else one line with the numbers and what to do.
   std::string warning;
 };
 
 // Summarises the confidences of checked camera-frames: the counts, the means, and the warning
 // (set when more than a tenth of the camera-frames, or any camera on average, falls below
-// `min_confidence`).
+// `min_confidence`); the warning says so when frames carve hulls larger than
+// `max_hull_volume_m3` (0: no limit).
 MaskTrust SummarizeMaskTrust(const Rig& rig, const std::vector<CameraFrameConfidence>& confidences,
-                             double min_confidence);
+                             double min_confidence, double max_hull_volume_m3 = 0);
 
 // Reads the masks of `frames` through `read_mask(camera, frame)` (an empty image: no mask for
 // that camera) and summarises CheckMultiView's confidence without correcting anything
-// (SummarizeMaskTrust with options.min_confidence).
+// (SummarizeMaskTrust with options.min_confidence and options.max_hull_volume_m3).
 MaskTrust AssessMaskTrust(const Rig& rig, const std::vector<int>& frames,
                           const std::function<Image(int camera, int frame)>& read_mask, const MultiViewOptions& options);
 

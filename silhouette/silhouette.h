@@ -96,6 +96,7 @@ struct MaskSummary {
   // Multi-view check (silhouette/multiview.h); 1 when not checked.
   double hull_explained = 1;  // fraction of the mask near the other cameras' hull
   double hull_covered = 1;    // fraction of that hull the mask covers
+  double hull_volume_m3 = 0;  // of the frame's hull of every camera's mask (0: not checked)
   // In [0, 1]: the hull consistency, lowered by a quarter for an area jump and for fragmentation.
   double confidence = 1;
   bool low_confidence = false;  // confidence < plate_free.multiview.min_confidence

@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
+#include "calib/rig_check.h"
 #include "core/cv_interop.h"
 #include "core/error.h"
 #include "silhouette/background_model.h"
@@ -78,6 +80,58 @@ TEST(MultiView, AHullTooCoarseForThinPartsDoesNotCondemnEveryCamera) {
   std::vector<Image> bad = masks;
   bad[2] = Shifted(masks[2], 25);
   EXPECT_LT(CheckMultiView(rig, &bad, {}, coarse)[2].confidence, 0.6);
+}
+
+// The hull's volume against an ellipsoid's exact one: a ring of cameras at one height carves
+// a hull a little larger than the body (no camera looks from above), never smaller.
+TEST(MultiView, HullVolumeIsTheVolumeOfTheBodyThatCastTheMasks) {
+  const Rig rig = testing::MakeRingRig(8, 320, 240);
+  const std::vector<testing::Ellipsoid> body = {{{0.0, 0.0, 1.0}, {0.25, 0.15, 0.4}, {200, 60, 50}}};
+  const double exact = 4.0 / 3.0 * M_PI * 0.25 * 0.15 * 0.4;
+  std::vector<Image> masks;
+  for (const Camera& camera : rig.cameras) masks.push_back(testing::RenderMask(camera, body));
+  VisualHullOptions options;
+  options.grid_resolution = 96;
+  HullUnderside hull;
+  VisualHullConsistency(rig, masks, {}, options, nullptr, &hull);
+  EXPECT_GT(hull.volume_m3, 0.95 * exact);
+  EXPECT_LT(hull.volume_m3, 1.35 * exact);
+}
+
+// Masks that all hold the same background (a platform under the actor, seen by every camera)
+// agree with each other, so each is "explained" by the others' hull; the hull they carve is no
+// person's, and that lowers every camera's confidence and makes the trust warning say why.
+TEST(MultiView, MasksThatAgreeOnTheSameBackgroundCarveAHullTooLargeForAPerson) {
+  const Rig rig = testing::MakeRingRig(4, 160, 120);
+  auto scene = [](bool with_platform) {
+    std::vector<testing::Ellipsoid> scene = testing::MakeActor(0.0, 0.0, 0.6);
+    if (with_platform) scene.push_back({{0.0, 0.0, 0.1}, {1.6, 1.6, 0.3}, {120, 120, 120}});
+    return scene;
+  };
+  for (const bool with_platform : {false, true}) {
+    std::vector<Image> masks;
+    for (const Camera& camera : rig.cameras) masks.push_back(testing::RenderMask(camera, scene(with_platform)));
+    const std::vector<ViewConsistency> views = CheckMultiView(rig, &masks, {}, MultiViewOptions{});
+    for (int c = 0; c < rig.size(); ++c) {
+      SCOPED_TRACE(rig.cameras[c].name + (with_platform ? " with the platform" : " actor only"));
+      EXPECT_GE(views[c].explained, 0.85);  // the masks agree either way
+      if (with_platform) {
+        EXPECT_GT(views[c].hull_volume_m3, 1.5);  // the platform is 3.2 m^3, 1.9 of it above the floor
+        EXPECT_LT(views[c].confidence, MultiViewOptions{}.min_confidence);
+        // What the confidence would be without the hull's size: the masks agree.
+        EXPECT_GE(views[c].confidence * views[c].hull_volume_m3 / MultiViewOptions{}.max_hull_volume_m3, 0.9);
+      } else {
+        EXPECT_GT(views[c].hull_volume_m3, 0.05);
+        EXPECT_LT(views[c].hull_volume_m3, 0.5);
+        EXPECT_GE(views[c].confidence, 0.85);
+      }
+    }
+    const MaskTrust trust = AssessMaskTrust(
+        rig, {0, 1}, [&](int camera, int) { return masks[camera]; }, MultiViewOptions{});
+    EXPECT_EQ(trust.oversized_hull_frames, with_platform ? 2 : 0);
+    EXPECT_EQ(trust.warning.empty(), !with_platform) << trust.warning;
+    if (with_platform) EXPECT_NE(trust.warning.find("visual hull of up to"), std::string::npos) << trust.warning;
+  }
 }
 
 TEST(MultiView, CorrectionRemovesAGhostAndFillsAHoleWhereTheOthersAgree) {
