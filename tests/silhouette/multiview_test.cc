@@ -108,26 +108,27 @@ TEST(MultiView, MasksThatAgreeOnTheSameBackgroundCarveAHullTooLargeForAPerson) {
     if (with_platform) scene.push_back({{0.0, 0.0, 0.1}, {1.6, 1.6, 0.3}, {120, 120, 120}});
     return scene;
   };
+  MultiViewOptions options;
+  options.grid_resolution = 64;  // enough for volumes (and fast under the sanitizers)
   for (const bool with_platform : {false, true}) {
     std::vector<Image> masks;
     for (const Camera& camera : rig.cameras) masks.push_back(testing::RenderMask(camera, scene(with_platform)));
-    const std::vector<ViewConsistency> views = CheckMultiView(rig, &masks, {}, MultiViewOptions{});
+    const std::vector<ViewConsistency> views = CheckMultiView(rig, &masks, {}, options);
     for (int c = 0; c < rig.size(); ++c) {
       SCOPED_TRACE(rig.cameras[c].name + (with_platform ? " with the platform" : " actor only"));
       EXPECT_GE(views[c].explained, 0.85);  // the masks agree either way
       if (with_platform) {
         EXPECT_GT(views[c].hull_volume_m3, 1.5);  // the platform is 3.2 m^3, 1.9 of it above the floor
-        EXPECT_LT(views[c].confidence, MultiViewOptions{}.min_confidence);
+        EXPECT_LT(views[c].confidence, options.min_confidence);
         // What the confidence would be without the hull's size: the masks agree.
-        EXPECT_GE(views[c].confidence * views[c].hull_volume_m3 / MultiViewOptions{}.max_hull_volume_m3, 0.9);
+        EXPECT_GE(views[c].confidence * views[c].hull_volume_m3 / options.max_hull_volume_m3, 0.9);
       } else {
         EXPECT_GT(views[c].hull_volume_m3, 0.05);
         EXPECT_LT(views[c].hull_volume_m3, 0.5);
         EXPECT_GE(views[c].confidence, 0.85);
       }
     }
-    const MaskTrust trust = AssessMaskTrust(
-        rig, {0, 1}, [&](int camera, int) { return masks[camera]; }, MultiViewOptions{});
+    const MaskTrust trust = AssessMaskTrust(rig, {0, 1}, [&](int camera, int) { return masks[camera]; }, options);
     EXPECT_EQ(trust.oversized_hull_frames, with_platform ? 2 : 0);
     EXPECT_EQ(trust.warning.empty(), !with_platform) << trust.warning;
     if (with_platform) EXPECT_NE(trust.warning.find("visual hull of up to"), std::string::npos) << trust.warning;
@@ -252,11 +253,13 @@ TEST(MultiView, TrustAssessmentWarnsAboutAShiftedCameraOnly) {
       return shift_cam1 && camera == 1 ? Shifted(mask, 30) : mask;
     };
   };
-  const MaskTrust good = AssessMaskTrust(rig, {0, 2, 4}, read(false), MultiViewOptions{});
+  MultiViewOptions options;
+  options.grid_resolution = 64;  // as the check of plate masks (fast under the sanitizers)
+  const MaskTrust good = AssessMaskTrust(rig, {0, 2, 4}, read(false), options);
   EXPECT_EQ(good.camera_frames, 18);
   EXPECT_EQ(good.low_confidence, 0);
   EXPECT_TRUE(good.warning.empty()) << good.warning;
-  const MaskTrust bad = AssessMaskTrust(rig, {0, 2, 4}, read(true), MultiViewOptions{});
+  const MaskTrust bad = AssessMaskTrust(rig, {0, 2, 4}, read(true), options);
   EXPECT_EQ(bad.low_confidence, 3);
   EXPECT_LT(bad.camera_confidence[1], 0.6);
   EXPECT_NE(bad.warning.find("worst camera cam1"), std::string::npos) << bad.warning;
