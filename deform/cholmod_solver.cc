@@ -20,10 +20,14 @@ namespace {
 // Below this many stored factor entries a solve stays on one thread (starting one costs more).
 constexpr double kMinParallelEntries = 150000.0;
 
-// A view of CHOLMOD's supernodal factor: supernode s covers the columns
+}  // namespace
+
+// A view of CHOLMOD's supernodal factor (outside the anonymous namespace: SparseCholesky::Impl
+// holds one): supernode s covers the columns
 // [first_col[s], first_col[s + 1]); its rows (its own columns first, then the rows below,
 // ascending) are rows[row_start[s] .. row_start[s + 1]), and its values are a column-major block
 // with leading dimension equal to its row count, at values + value_start[s].
+namespace cholmod_solver_internal {
 struct SupernodalView {
   int count = 0;
   const int* first_col = nullptr;
@@ -34,6 +38,10 @@ struct SupernodalView {
   const double* inverse_diagonal = nullptr;  // per column, 1 / L(j, j): a multiply instead of a divide
   const float* float_values = nullptr;       // values rounded to single precision, or null
 };
+}  // namespace cholmod_solver_internal
+using cholmod_solver_internal::SupernodalView;
+
+namespace {
 
 template <typename T>
 const T* Values(const SupernodalView& f);

@@ -26,7 +26,7 @@ struct FixedVertex {
 };
 
 // Where Draw writes.
-struct Target {
+struct RasterTarget {
   int width = 0;
   int row_begin = 0, row_end = 0;
   float* inverse_depth = nullptr;
@@ -52,7 +52,7 @@ bool IncludesTies(const FixedVertex& a, const FixedVertex& b) {
 }
 
 // Rasterises one triangle; with `cull`, only when it is a front face, else in either orientation.
-void RasterTriangle(FixedVertex a, FixedVertex b, FixedVertex c, std::int32_t face, bool cull, const Target& t,
+void RasterTriangle(FixedVertex a, FixedVertex b, FixedVertex c, std::int32_t face, bool cull, const RasterTarget& t,
                     PixelBox* box) {
   // Twice the signed area in image coordinates (x right, y down). A face counter-clockwise seen
   // from outside appears with area < 0 (the y axis points down), as in ClipFromCamera + glFrontFace(GL_CW).
@@ -205,7 +205,7 @@ void CpuRasterizer::Project(const Camera& camera, const RowMatrixX3f& vertices_i
 PixelBox CpuRasterizer::Draw(const CpuRasterFrame& frame, int row_begin, int row_end, float* inverse_depth,
                              std::int32_t* face_ids) const {
   PixelBox box;
-  Target t;
+  RasterTarget t;
   t.width = frame.width;
   t.row_begin = std::max(row_begin, 0);
   t.row_end = std::min(row_end, frame.height);

@@ -17,6 +17,8 @@ template <typename T> using Mat3 = Eigen::Matrix<T, 3, 3>;
 // Shape groups shared by left and right: head, neck, upper torso, lower torso, upper arm,
 // forearm, hand, thigh, shank, foot.
 constexpr int kNumShapeGroups = 10;
+
+constexpr double kDeg = M_PI / 180.0;  // one degree in radians
 constexpr int kSegmentGroup[kNumBodySegments] = {0, 1, 2, 3, 4, 5, 6, 4, 5, 6, 7, 8, 9, 7, 8, 9};
 
 using std::cos;

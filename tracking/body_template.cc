@@ -12,7 +12,7 @@ using Eigen::Vector2d;
 using Eigen::Vector3d;
 namespace ti = tracking_internal;
 
-constexpr double kDeg = M_PI / 180.0;
+using ti::kDeg;
 
 JointDof Ball(double x_lo, double x_hi, double y_lo, double y_hi, double z_lo, double z_hi) {
   JointDof d;

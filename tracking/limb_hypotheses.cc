@@ -4,12 +4,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "tracking/body_model_impl.h"
+
 namespace confluent {
 namespace {
 
 using Eigen::Vector3d;
 
-constexpr double kDeg = M_PI / 180.0;
+using tracking_internal::kDeg;
 
 // Upper-limb directions in the parent's rest-aligned frame (x lateral towards the limb's side,
 // y forward, z up; mirrored for the right side), with the elbow/knee angles tried for each.

@@ -18,12 +18,7 @@ namespace {
 
 using testing::RunConfluent;
 using testing::TempDir;
-
-void WriteFile(const std::string& path, const std::string& text) {
-  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
-  std::ofstream out(path);
-  out << text;
-}
+using testing::WriteFile;
 
 std::string Num(double value) {
   char buffer[40];

@@ -59,7 +59,7 @@ TEST(CandyWrapperFigure, HandlingKeepsTheTwistedForearmFromPinching) {
   panels[3].options.slerp_paths = true;
 
   // Side view of the vertical tube, elbow (z = 0) at the bottom.
-  const Camera camera = render_test::LookAtCamera(Eigen::Vector3d(1.2, -0.5, 0.3), Eigen::Vector3d(0, 0, 0.3),
+  const Camera camera = render_test::LookAtTestCamera(Eigen::Vector3d(1.2, -0.5, 0.3), Eigen::Vector3d(0, 0, 0.3),
                                                   220, 440, 650.0);
   const int elbow_row = static_cast<int>(std::lround(camera.Project(Eigen::Vector3d(0, 0, 0.05)).y()));
   const int row_low = static_cast<int>(std::lround(camera.Project(Eigen::Vector3d(0, 0, 0.15)).y()));

@@ -19,6 +19,7 @@
 namespace confluent {
 namespace {
 namespace fs = std::filesystem;
+using testing::CountFiles;
 
 bool HaveFfmpeg() { return std::system("ffmpeg -version >/dev/null 2>&1 && ffprobe -version >/dev/null 2>&1") == 0; }
 
@@ -41,13 +42,6 @@ struct RenderFixture {
     }
   }
 };
-
-int CountFiles(const std::string& dir, const std::string& extension) {
-  int count = 0;
-  if (!fs::is_directory(dir)) return 0;
-  for (const auto& entry : fs::directory_iterator(dir)) count += entry.path().extension() == extension;
-  return count;
-}
 
 TEST(RenderCommand, OrbitWritesPngsAndMp4AndListsMissingFrames) {
   RenderFixture f;

@@ -20,6 +20,7 @@ namespace confluent {
 namespace {
 namespace fs = std::filesystem;
 using testing::RunConfluent;
+using testing::CountFiles;
 
 // One tiny capture (4 ring + 2 held-out cameras, 160x120, 10 frames at 12.5 fps) for the suite.
 class RunCommandTest : public ::testing::Test {
@@ -61,13 +62,6 @@ std::map<std::string, fs::file_time_type> ModificationTimes(const std::string& r
   for (const auto& entry : fs::recursive_directory_iterator(root))
     if (entry.is_regular_file()) times[fs::relative(entry.path(), root).string()] = entry.last_write_time();
   return times;
-}
-
-int CountFiles(const std::string& dir, const std::string& extension) {
-  if (!fs::is_directory(dir)) return 0;
-  int n = 0;
-  for (const auto& entry : fs::directory_iterator(dir)) n += entry.path().extension() == extension;
-  return n;
 }
 
 bool IsTemporary(const fs::path& path) { return path.filename().string().rfind(".tmp", 0) == 0; }

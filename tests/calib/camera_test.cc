@@ -18,7 +18,7 @@ namespace confluent {
 namespace {
 
 // A camera at `center` looking at `target` (world z up), OpenCV axes.
-Camera LookAtCamera(const std::string& name, const Eigen::Vector3d& center, const Eigen::Vector3d& target,
+Camera DistortedLookAtCamera(const std::string& name, const Eigen::Vector3d& center, const Eigen::Vector3d& target,
                     int width, int height, double focal_px, const Vector5d& dist) {
   Camera camera;
   camera.name = name;
@@ -46,10 +46,10 @@ Vector5d Dist(double k1, double k2, double p1, double p2, double k3) {
 // Synthetic cameras with realistic distortion: none, mild, GoPro-like barrel, pincushion.
 std::vector<Camera> SyntheticCameras() {
   return {
-      LookAtCamera("pinhole", {3.0, 0.5, 1.5}, {0, 0, 1}, 640, 480, 600.0, Vector5d::Zero()),
-      LookAtCamera("mild", {-2.5, 2.0, 1.8}, {0, 0, 0.9}, 1024, 768, 1100.0, Dist(-0.12, 0.08, 0.0012, -0.0008, -0.01)),
-      LookAtCamera("barrel", {0.2, -3.5, 2.2}, {0, 0, 1}, 1920, 1080, 1000.0, Dist(-0.28, 0.09, 0.0005, 0.0003, -0.002)),
-      LookAtCamera("pincushion", {2.0, 2.0, 0.8}, {0, 0, 1.2}, 800, 600, 1500.0, Dist(0.15, -0.3, -0.001, 0.002, 0.4)),
+      DistortedLookAtCamera("pinhole", {3.0, 0.5, 1.5}, {0, 0, 1}, 640, 480, 600.0, Vector5d::Zero()),
+      DistortedLookAtCamera("mild", {-2.5, 2.0, 1.8}, {0, 0, 0.9}, 1024, 768, 1100.0, Dist(-0.12, 0.08, 0.0012, -0.0008, -0.01)),
+      DistortedLookAtCamera("barrel", {0.2, -3.5, 2.2}, {0, 0, 1}, 1920, 1080, 1000.0, Dist(-0.28, 0.09, 0.0005, 0.0003, -0.002)),
+      DistortedLookAtCamera("pincushion", {2.0, 2.0, 0.8}, {0, 0, 1.2}, 800, 600, 1500.0, Dist(0.15, -0.3, -0.001, 0.002, 0.4)),
   };
 }
 

@@ -15,6 +15,7 @@ namespace confluent {
 namespace {
 
 using testing::TempDir;
+using testing::WriteFile;
 
 Rig ExampleRig() {
   Rig rig;
@@ -32,11 +33,6 @@ Rig ExampleRig() {
     rig.cameras.push_back(camera);
   }
   return rig;
-}
-
-void WriteFile(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
 }
 
 // An intri.yml for camera "a" with the given K and dist data lists.

@@ -26,6 +26,7 @@ namespace {
 
 using testing::SharedDataPath;
 using testing::TempDir;
+using testing::WriteFile;
 
 // `count` cameras on a ring of radius 3 m around (0, 0, 1), world z up, with distortion.
 Rig GroundTruthRig(int count = 5) {
@@ -71,12 +72,6 @@ double MaxProjectionDifference(const Rig& expected, const Rig& actual) {
     worst = std::max(worst, (expected.cameras[c].center_in_world() - actual.cameras[c].center_in_world()).norm() * 1e3);
   }
   return worst;
-}
-
-void WriteFile(const std::string& path, const std::string& text) {
-  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
-  std::ofstream out(path);
-  out << text;
 }
 
 std::string Num(double value) {

@@ -10,7 +10,6 @@
 namespace confluent {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 TEST(OrbitPath, CamerasCircleTheCentreAndLookAtIt) {
   OrbitPathOptions options;
@@ -39,8 +38,8 @@ TEST(OrbitPath, CamerasCircleTheCentreAndLookAtIt) {
     EXPECT_LT(camera.Project(options.center_in_world + Eigen::Vector3d(0, 0, 0.1)).y(), pixel.y());
     // Equal azimuth steps of 30 degrees, counter-clockwise, starting in front (-y).
     const double azimuth = std::atan2(c.y() - options.center_in_world.y(), c.x() - options.center_in_world.x());
-    const double expected = (-90.0 + 30.0 * i) * kPi / 180.0;
-    EXPECT_NEAR(std::remainder(azimuth - expected, 2 * kPi), 0.0, 1e-9) << i;
+    const double expected = (-90.0 + 30.0 * i) * M_PI / 180.0;
+    EXPECT_NEAR(std::remainder(azimuth - expected, 2 * M_PI), 0.0, 1e-9) << i;
   }
 }
 
@@ -60,7 +59,7 @@ TEST(OrbitPath, PartialSweepEndsAtTheEndAngle) {
 TEST(OrbitPath, FittedToARing) {
   std::vector<Camera> ring;
   for (int i = 0; i < 6; ++i) {
-    const double a = 2 * kPi * i / 6;
+    const double a = 2 * M_PI * i / 6;
     ring.push_back(LookAtCamera("c" + std::to_string(i), Eigen::Vector3d(3 * std::cos(a), 3 * std::sin(a), 1.8),
                                 Eigen::Vector3d(0, 0, 1), 200, 100, 150));
   }
@@ -77,7 +76,7 @@ std::vector<Camera> KeyCameras() {
   const Eigen::Vector3d target(0, 0, 1);
   const double angles[] = {-80.0, -20.0, 35.0, 110.0};
   for (int j = 0; j < 4; ++j) {
-    const double a = angles[j] * kPi / 180.0;
+    const double a = angles[j] * M_PI / 180.0;
     Camera camera = LookAtCamera("key" + std::to_string(j),
                                  Eigen::Vector3d(3.0 * std::cos(a), 3.0 * std::sin(a), 1.2 + 0.2 * j), target, 160,
                                  120, 140.0 + 10.0 * j);
@@ -112,7 +111,7 @@ TEST(PathThroughCameras, PassesExactlyThroughTheKeys) {
       EXPECT_LT(step, 0.6) << i;
       EXPECT_GT(step, 0.05) << i;
       const double turn = Eigen::AngleAxisd(path[i].rotation * path[i - 1].rotation.transpose()).angle();
-      EXPECT_LT(turn, 15.0 * kPi / 180.0) << i;
+      EXPECT_LT(turn, 15.0 * M_PI / 180.0) << i;
     }
   }
   // Midway between two keys the camera still looks roughly at the common target.

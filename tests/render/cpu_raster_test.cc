@@ -15,7 +15,7 @@
 namespace confluent {
 namespace {
 
-using render_test::LookAtCamera;
+using render_test::LookAtTestCamera;
 using render_test::MakeIcosphere;
 
 // A (n x n)-quad grid of side `size` in the plane through `center` spanned by unit u, v (normal
@@ -47,7 +47,7 @@ double PlaneDepth(const Camera& camera, const Eigen::Vector2d& pixel, const Eige
 }
 
 TEST(CpuRasterizer, TiltedPlaneHasAnalyticDepthAndNoGaps) {
-  const Camera camera = LookAtCamera(Eigen::Vector3d(0.3, -3.0, 0.8), Eigen::Vector3d(0, 0, 0), 160, 120, 150.0);
+  const Camera camera = LookAtTestCamera(Eigen::Vector3d(0.3, -3.0, 0.8), Eigen::Vector3d(0, 0, 0), 160, 120, 150.0);
   // Normal towards the camera side (-y, tilted): front faces.
   const Eigen::Vector3d normal = Eigen::Vector3d(0.2, -1.0, 0.3).normalized();
   const Eigen::Vector3d u = Eigen::Vector3d::UnitZ().cross(normal).normalized();
@@ -99,7 +99,7 @@ TEST(CpuRasterizer, SphereDepthMatchesTheAnalyticSurface) {
   const Eigen::Vector3d center(0.1, -0.05, 0.2);
   const double radius = 0.5;
   const Mesh sphere = MakeIcosphere(center, radius, 4);  // 5120 faces
-  const Camera camera = LookAtCamera(Eigen::Vector3d(0.5, -2.5, 0.9), center, 160, 120, 150.0);
+  const Camera camera = LookAtTestCamera(Eigen::Vector3d(0.5, -2.5, 0.9), center, 160, 120, 150.0);
   CpuRasterizer rasterizer(sphere.faces, sphere.num_vertices());
   CpuRasterFrame frame;
   std::vector<float> depth;
@@ -128,7 +128,7 @@ TEST(CpuRasterizer, SphereDepthMatchesTheAnalyticSurface) {
 // a fresh draw: nothing of the first frame is left behind.
 TEST(CpuRasterizer, RedrawClearsWhatThePreviousFrameDrew) {
   const Mesh sphere = MakeIcosphere(Eigen::Vector3d(0, 0, 0), 0.5, 3);
-  const Camera camera = LookAtCamera(Eigen::Vector3d(0.5, -2.5, 0.9), Eigen::Vector3d::Zero(), 160, 120, 150.0);
+  const Camera camera = LookAtTestCamera(Eigen::Vector3d(0.5, -2.5, 0.9), Eigen::Vector3d::Zero(), 160, 120, 150.0);
   CpuRasterizer rasterizer(sphere.faces, sphere.num_vertices());
   CpuRasterFrame frame;
   std::vector<float> reused, fresh;
@@ -154,7 +154,7 @@ TEST(CpuRasterizer, AgreesWithMeshRendererDepthAndTriangleIds) {
   CpuRasterizer rasterizer(mesh.faces, mesh.num_vertices());
   const RowMatrixX3f vertices = mesh.vertices.cast<float>();
   for (const Eigen::Vector3d& eye : {Eigen::Vector3d(2.2, -1.0, 0.7), Eigen::Vector3d(-0.3, 2.0, -1.5)}) {
-    const Camera camera = LookAtCamera(eye, Eigen::Vector3d(0.05, 0, 0), 200, 150, 180.0);
+    const Camera camera = LookAtTestCamera(eye, Eigen::Vector3d(0.05, 0, 0), 200, 150, 180.0);
     RenderRequest request;
     request.color = false;
     request.depth = true;
@@ -201,7 +201,7 @@ TEST(CpuRasterizer, AgreesWithMeshRendererDepthAndTriangleIds) {
 TEST(CpuRasterizer, ClipsAtTheNearPlane) {
   // A large floor passing under and behind the camera: only the part in front is drawn, with the
   // analytic depth, and nothing behind the camera folds into the image.
-  const Camera camera = LookAtCamera(Eigen::Vector3d(0, 0, 0.5), Eigen::Vector3d(0, 3, 0.0), 160, 120, 100.0);
+  const Camera camera = LookAtTestCamera(Eigen::Vector3d(0, 0, 0.5), Eigen::Vector3d(0, 3, 0.0), 160, 120, 100.0);
   const Mesh floor = MakeGrid(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), 40.0, 4);
   CpuRasterOptions options;
   options.near_m = 0.05;

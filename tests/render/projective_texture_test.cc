@@ -12,7 +12,6 @@
 namespace confluent {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 const Eigen::Vector3d kCentre(0.0, 0.0, 1.0);
 
 // A sphere with smoothly varying vertex colours (the "real" actor).
@@ -36,7 +35,7 @@ Mesh FlatSphere(float r, float g, float b) {
 }
 
 Camera RingCamera(const std::string& name, double azimuth_deg, double height_m, int width = 160, int height = 120) {
-  const double a = azimuth_deg * kPi / 180.0;
+  const double a = azimuth_deg * M_PI / 180.0;
   return LookAtCamera(name, Eigen::Vector3d(3.0 * std::cos(a), 3.0 * std::sin(a), height_m), kCentre, width, height,
                       170.0 * width / 160.0);
 }

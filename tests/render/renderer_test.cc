@@ -16,7 +16,7 @@
 namespace confluent {
 namespace {
 
-using render_test::LookAtCamera;
+using render_test::LookAtTestCamera;
 using render_test::MakeDisc;
 using render_test::MakeIcosphere;
 using render_test::MakeSquare;

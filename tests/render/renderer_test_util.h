@@ -12,7 +12,7 @@
 namespace confluent::render_test {
 
 // A camera at `center_in_world` looking at `target_in_world`, world Z up, OpenCV axes.
-inline Camera LookAtCamera(const Eigen::Vector3d& center_in_world, const Eigen::Vector3d& target_in_world,
+inline Camera LookAtTestCamera(const Eigen::Vector3d& center_in_world, const Eigen::Vector3d& target_in_world,
                            int width = 160, int height = 120, double focal_px = 150.0) {
   Camera camera;
   camera.name = "test";
@@ -31,7 +31,7 @@ inline Camera LookAtCamera(const Eigen::Vector3d& center_in_world, const Eigen::
 
 // A generic test camera: 160x120, looking at the origin from a non-axis-aligned position.
 inline Camera TestCamera(bool with_distortion) {
-  Camera camera = LookAtCamera(Eigen::Vector3d(1.1, -2.6, 0.9), Eigen::Vector3d(0.02, 0.03, 0.01));
+  Camera camera = LookAtTestCamera(Eigen::Vector3d(1.1, -2.6, 0.9), Eigen::Vector3d(0.02, 0.03, 0.01));
   if (with_distortion) camera.dist << -0.28, 0.09, 0.0012, -0.0009, -0.01;
   return camera;
 }

@@ -16,7 +16,7 @@
 namespace confluent {
 namespace {
 
-constexpr int kWidth = 320, kHeight = 240;
+constexpr int kFrameWidth = 320, kFrameHeight = 240;
 
 // The actor of MakeActor with legs that end at the ankles (8 cm) and navy shoes below them.
 std::vector<testing::Ellipsoid> ActorWithoutShoes() {
@@ -36,10 +36,10 @@ std::vector<testing::Ellipsoid> Shoes() {
 // A brown floor, slightly textured, and its plate darkened to 30% where the actor's shadow lies
 // on the floor (an ellipse beside the feet).
 Image Floor(const Camera& camera, bool shadow, unsigned seed) {
-  Image image(kWidth, kHeight, 3);
+  Image image(kFrameWidth, kFrameHeight, 3);
   const Eigen::Vector3d origin = camera.center_in_world();
-  for (int y = 0; y < kHeight; ++y)
-    for (int x = 0; x < kWidth; ++x) {
+  for (int y = 0; y < kFrameHeight; ++y)
+    for (int x = 0; x < kFrameWidth; ++x) {
       const unsigned hash = (x * 73856093u) ^ (y * 19349663u) ^ (seed * 83492791u);
       const int grain = static_cast<int>(hash % 9) - 4;
       double factor = 1.0;
@@ -57,7 +57,7 @@ Image Floor(const Camera& camera, bool shadow, unsigned seed) {
 }
 
 struct FeetScene {
-  Rig rig = testing::MakeRingRig(8, kWidth, kHeight);
+  Rig rig = testing::MakeRingRig(8, kFrameWidth, kFrameHeight);
   std::vector<Image> frames, without_shoes, shoes, shadow;
   std::vector<BackgroundModel> models;
   HullUnderside underside;
@@ -78,7 +78,7 @@ struct FeetScene {
       // The shadow's visible pixels: darker than the plate and not the actor.
       const Image dark = Floor(camera, true, c);
       const Image actor = testing::RenderMask(camera, whole);
-      Image visible_shadow(kWidth, kHeight, 1);
+      Image visible_shadow(kFrameWidth, kFrameHeight, 1);
       for (std::size_t i = 0; i < visible_shadow.data.size(); ++i)
         visible_shadow.data[i] = !actor.data[i] && dark.data[i * 3] < plate.data[i * 3] ? 255 : 0;
       shadow.push_back(visible_shadow);

@@ -16,18 +16,18 @@ namespace {
 
 using testing::Iou;
 
-constexpr int kWidth = 240, kHeight = 240;
+constexpr int kGrabWidth = 240, kGrabHeight = 240;
 const cv::Scalar kWall(70, 90, 150), kFloor(110, 80, 55);
 
 // A blue-grey wall over a brown floor, and a body: a head, a torso, red legs.
 struct Body {
-  Image frame{kWidth, kHeight, 3};
-  Image truth{kWidth, kHeight, 1};
-  Image torso{kWidth, kHeight, 1};
+  Image frame{kGrabWidth, kGrabHeight, 3};
+  Image truth{kGrabWidth, kGrabHeight, 1};
+  Image torso{kGrabWidth, kGrabHeight, 1};
   explicit Body(const cv::Scalar& shirt) {
     cv::Mat image = AsCvMat(frame), mask = AsCvMat(truth), upper = AsCvMat(torso);
-    image(cv::Rect(0, 0, kWidth, 130)).setTo(kWall);
-    image(cv::Rect(0, 130, kWidth, kHeight - 130)).setTo(kFloor);
+    image(cv::Rect(0, 0, kGrabWidth, 130)).setTo(kWall);
+    image(cv::Rect(0, 130, kGrabWidth, kGrabHeight - 130)).setTo(kFloor);
     const auto draw = [&](const cv::Point& centre, const cv::Size& axes, const cv::Scalar& colour, bool is_torso) {
       cv::ellipse(image, centre, axes, 0, 0, 360, colour, cv::FILLED);
       cv::ellipse(mask, centre, axes, 0, 0, 360, cv::Scalar(255), cv::FILLED);
@@ -62,7 +62,7 @@ TEST(GrabCutRefine, CutsAgainWhenTheFirstCutLosesWhatTheHullHolds) {
   const Body body(kWall + cv::Scalar(8, 6, -6));
   Image mask = body.truth;
   cv::Mat m = AsCvMat(mask);
-  for (int y = 40; y < 150; y += 12) m(cv::Rect(0, y, kWidth, 4)).setTo(0, AsCvMat(body.torso)(cv::Rect(0, y, kWidth, 4)));
+  for (int y = 40; y < 150; y += 12) m(cv::Rect(0, y, kGrabWidth, 4)).setTo(0, AsCvMat(body.torso)(cv::Rect(0, y, kGrabWidth, 4)));
   Image hull = body.truth;
   cv::dilate(AsCvMat(hull), AsCvMat(hull), cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7}));
   GrabCutRefineOptions once;

@@ -131,7 +131,9 @@ TEST(MultiView, MasksThatAgreeOnTheSameBackgroundCarveAHullTooLargeForAPerson) {
     const MaskTrust trust = AssessMaskTrust(rig, {0, 1}, [&](int camera, int) { return masks[camera]; }, options);
     EXPECT_EQ(trust.oversized_hull_frames, with_platform ? 2 : 0);
     EXPECT_EQ(trust.warning.empty(), !with_platform) << trust.warning;
-    if (with_platform) EXPECT_NE(trust.warning.find("visual hull of up to"), std::string::npos) << trust.warning;
+    if (with_platform) {
+      EXPECT_NE(trust.warning.find("visual hull of up to"), std::string::npos) << trust.warning;
+    }
   }
 }
 

@@ -117,7 +117,9 @@ TEST(SilhouettesCli, RunWarnsBeforeTrackingWhenGivenMasksDisagreeBetweenCameras)
   const std::size_t warning = run.stdout_text.find("warning: the silhouettes cannot be trusted");
   ASSERT_NE(warning, std::string::npos) << run.stdout_text << run.stderr_text;
   const std::size_t tracking = run.stdout_text.find("\ntracking ");
-  if (tracking != std::string::npos) EXPECT_LT(warning, tracking) << run.stdout_text;
+  if (tracking != std::string::npos) {
+    EXPECT_LT(warning, tracking) << run.stdout_text;
+  }
   EXPECT_NE(run.stdout_text.find("--masks", warning), std::string::npos) << run.stdout_text;
   // The camera-frames themselves: in the log and in RUN/mask_confidence.json (report.html shows it).
   EXPECT_NE(run.stdout_text.find("cam02 frames 0-1"), std::string::npos) << run.stdout_text;

@@ -84,6 +84,20 @@ std::vector<std::string> ExtractSambaSequence(const std::string& dir) {
   return files;
 }
 
+void WriteFile(const std::string& path, const std::string& text) {
+  const fs::path parent = fs::path(path).parent_path();
+  if (!parent.empty()) fs::create_directories(parent);
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+int CountFiles(const std::string& dir, const std::string& extension) {
+  if (!fs::is_directory(dir)) return 0;
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) count += entry.path().extension() == extension;
+  return count;
+}
+
 std::string SharedDataPath(const std::string& relative) {
   const char* root = std::getenv("CONFLUENT_SHARED_DATA");
   fs::path base = root ? fs::path(root) : fs::path(CONFLUENT_DEFAULT_SHARED_DATA);

@@ -54,6 +54,12 @@ std::string CaptureOutput(const std::string& shell_command);
 // std::runtime_error when the archive is present but cannot be extracted.
 std::vector<std::string> ExtractSambaSequence(const std::string& dir);
 
+// Writes `text` to `path` (binary, so bytes go through unchanged), creating its parent folders.
+void WriteFile(const std::string& path, const std::string& text);
+
+// Number of files in `dir` whose extension is `extension` (".png"); 0 when `dir` is not a folder.
+int CountFiles(const std::string& dir, const std::string& extension);
+
 // Absolute path of ../shared/data/<relative>, or "" when it does not exist. Tests call
 // GTEST_SKIP() with a message when this is empty.
 std::string SharedDataPath(const std::string& relative);

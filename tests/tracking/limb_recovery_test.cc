@@ -136,7 +136,9 @@ TEST(LimbHypotheses, MoveOnlyTheirLimbWithinTheJointLimits) {
       for (int j = 0; j < kNumTemplateJoints; ++j)
         for (int d = 0; d < 3; ++d) {
           EXPECT_EQ(clamped.dofs[j][d], hypothesis.dofs[j][d]);
-          if (j != root && j != root + 1) EXPECT_EQ(hypothesis.dofs[j][d], pose.dofs[j][d]) << LimbName(limb);
+          if (j != root && j != root + 1) {
+            EXPECT_EQ(hypothesis.dofs[j][d], pose.dofs[j][d]) << LimbName(limb);
+          }
         }
     }
   }
