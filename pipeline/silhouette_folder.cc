@@ -158,7 +158,9 @@ SilhouetteFolderSummary ExtractSilhouettesToFolder(const Capture& capture, const
     // Green key: the greenness threshold; background models: the automatic threshold factor.
     char threshold[32];
     std::snprintf(threshold, sizeof threshold, info.method == SilhouetteMethod::kGreen ? "g %.3f"
-                                               : info.method == SilhouetteMethod::kMog2 ? "-" : "x %.2f",
+                                               : info.method == SilhouetteMethod::kMog2 || info.method == SilhouetteMethod::kPerson
+                                                   ? "-"
+                                                   : "x %.2f",
                   info.method == SilhouetteMethod::kGreen ? info.greenness : info.threshold_scale);
     std::snprintf(text, sizeof text, "%-12s %-8s %10.2f %6d %6d %6d %6d %10s %6.3f %5d", info.name.c_str(),
                   SilhouetteMethodName(info.method), 100.0 * sum / frames, empty, full, border, jump, threshold,

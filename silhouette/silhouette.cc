@@ -22,7 +22,8 @@ SilhouetteMethod ParseSilhouetteMethod(const std::string& name) {
   if (name == "green") return SilhouetteMethod::kGreen;
   if (name == "learned") return SilhouetteMethod::kLearned;
   if (name == "mog2") return SilhouetteMethod::kMog2;
-  throw UsageError("--method: expected auto, plate, green, learned or mog2, got '" + name + "'");
+  if (name == "person") return SilhouetteMethod::kPerson;
+  throw UsageError("--method: expected auto, plate, green, learned, mog2 or person, got '" + name + "'");
 }
 
 const char* SilhouetteMethodName(SilhouetteMethod method) {
@@ -32,6 +33,7 @@ const char* SilhouetteMethodName(SilhouetteMethod method) {
     case SilhouetteMethod::kGreen: return "green";
     case SilhouetteMethod::kLearned: return "learned";
     case SilhouetteMethod::kMog2: return "mog2";
+    case SilhouetteMethod::kPerson: return "person";
   }
   return "?";
 }
@@ -49,6 +51,7 @@ void SilhouetteOptions::Check() const {
   RequireOption(threads >= 1 && threads <= 256, owner + "threads", threads, "in [1, 256]");
   RequireOption(max_parts >= 1, owner + "max_parts", max_parts, ">= 1");
   plate_free.Check();
+  person.Check();
   grabcut.Check();
   feet.Check();
 }
@@ -235,6 +238,9 @@ SilhouetteExtractor::SilhouetteExtractor(const std::string& camera_name, const s
       }
       break;
     }
+    case SilhouetteMethod::kPerson:
+      person_ = std::make_unique<PersonSegmenter>(options.person);
+      break;
     case SilhouetteMethod::kAuto: break;  // resolved above
   }
   if (!model_.empty()) {
@@ -258,6 +264,12 @@ Image SilhouetteExtractor::Extract(const Image& frame, int frame_index, MaskSumm
       mog2_->subtractor->apply(AsCvMat(rgb), foreground, -1);
       cv::threshold(foreground, foreground, 200, 255, cv::THRESH_BINARY);  // shadows (127) are background
       raw = ImageFromCvMat(foreground);
+      break;
+    }
+    case SilhouetteMethod::kPerson: {
+      cv::Mat bgr;
+      cv::cvtColor(AsCvMat(rgb), bgr, cv::COLOR_RGB2BGR);
+      raw = ImageFromCvMat(person_->Segment(bgr, source.empty() ? info_.name : source).mask);
       break;
     }
     default: raw = model_.Classify(rgb); break;

@@ -16,6 +16,7 @@
 #include "silhouette/grabcut_refine.h"
 #include "silhouette/mask_cleanup.h"
 #include "silhouette/multiview.h"
+#include "silhouette/person_segmenter.h"
 #include "silhouette/plate_free.h"
 
 namespace confluent {
@@ -27,9 +28,10 @@ enum class SilhouetteMethod {
   kGreen,    // chroma key against a green screen
   kLearned,  // temporal median background learned from the video + Horprasert classifier
   kMog2,     // OpenCV's Gaussian-mixture background subtractor (Zivkovic 2004), fed the plate first
+  kPerson,   // a learned person prior, no background at all (BlazePose, silhouette/person_segmenter.h)
 };
 
-// "auto", "plate", "green", "learned", "mog2". Throws UsageError listing the names.
+// "auto", "plate", "green", "learned", "mog2", "person". Throws UsageError listing the names.
 SilhouetteMethod ParseSilhouetteMethod(const std::string& name);
 const char* SilhouetteMethodName(SilhouetteMethod method);
 
@@ -53,6 +55,7 @@ struct SilhouetteOptions {
   // other cameras' hulls (silhouette/plate_free.h); false: each its own temporal median.
   bool plate_free_multiview = true;
   PlateFreeOptions plate_free;
+  PersonSegmenterOptions person;  // the person method
   // Every frame's masks are checked against the other cameras' hulls (a confidence per
   // camera-frame); the masks of cameras without a plate are also corrected by it.
   bool multiview_check = true;
@@ -165,6 +168,7 @@ class SilhouetteExtractor {
   CameraSilhouetteInfo info_;
   BackgroundModel model_;
   std::unique_ptr<Mog2> mog2_;
+  std::unique_ptr<PersonSegmenter> person_;  // the person method's Node process
   int width_ = 0;
   int height_ = 0;
   double previous_fraction_ = -1;  // < 0 before the first frame
