@@ -170,5 +170,40 @@ TEST(RealSilhouettes, Pose2simLearnedBackgroundBestEffort) {
   EXPECT_GE(plausible, total * 3 / 4);
 }
 
+// The learned person prior on the same footage: the whole performer in every camera, and
+// nothing of the platform, the walls or the people around (the background model's masks above
+// hold 30-47 % of each image).
+TEST(RealSilhouettes, Pose2simPersonPriorFindsThePerformerOnly) {
+  const std::string data = testing::SharedDataPath("real/pose2sim_single");
+  if (data.empty()) GTEST_SKIP() << "../shared/data/real/pose2sim_single is absent";
+  fs::create_directories(kSheetDir);
+  const std::vector<int> frames = {0, 50, 99};
+  std::vector<Image> tiles;
+  for (int c = 1; c <= 4; ++c) {
+    char name[16];
+    std::snprintf(name, sizeof name, "cam%02d", c);
+    VideoFrames video(data + "/videos/" + name + ".mp4");
+    SilhouetteOptions options;
+    options.method = SilhouetteMethod::kPerson;
+    SilhouetteExtractor extractor(name, "", [&video](int k) { return video.Read(k); }, video.reader.num_frames(), 0,
+                                  options);
+    for (int frame : frames) {
+      const Image image = video.Read(frame);
+      MaskSummary summary;
+      const Image mask = extractor.Extract(image, frame, &summary);
+      std::printf("%s frame %3d: foreground %.2f%%, parts %d\n", name, frame, 100 * summary.foreground_fraction,
+                  summary.parts);
+      // The performer covers 5-7 % of these portrait images (measured at half resolution).
+      EXPECT_GT(summary.foreground_fraction, 0.03) << name << " frame " << frame;
+      EXPECT_LT(summary.foreground_fraction, 0.12) << name << " frame " << frame;
+      EXPECT_LE(summary.parts, 2) << name << " frame " << frame;
+      tiles.push_back(DrawMaskOverlay(image, mask, 240, std::string(name) + " frame " + std::to_string(frame)));
+    }
+  }
+  const std::string sheet = std::string(kSheetDir) + "/pose2sim_person.png";
+  WriteImage(sheet, TileImages(tiles, static_cast<int>(frames.size())));
+  std::printf("contact sheet (rows: cameras, columns: frames): %s\n", sheet.c_str());
+}
+
 }  // namespace
 }  // namespace confluent
