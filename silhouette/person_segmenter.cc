@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/child_process.h"
+#include "core/cv_interop.h"
 #include "core/error.h"
 
 namespace confluent {
@@ -26,11 +27,13 @@ constexpr std::size_t kReplyBytes = kSide * kSide + (kModelLandmarks * 5 + 1) * 
 
 double Sigmoid(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
-// The square `crop` of `bgr`, black where it reaches outside the image.
-cv::Mat SquareCrop(const cv::Mat& bgr, const cv::Rect& crop) {
-  cv::Mat square(crop.height, crop.width, CV_8UC3, cv::Scalar::all(0));
-  const cv::Rect inside = crop & cv::Rect(0, 0, bgr.cols, bgr.rows);
-  if (!inside.empty()) bgr(inside).copyTo(square(inside - crop.tl()));
+cv::Rect AsRect(const PersonCrop& crop) { return {crop.x, crop.y, crop.side, crop.side}; }
+
+// The square `crop` of `image`, black where it reaches outside the image.
+cv::Mat SquareCrop(const cv::Mat& image, const cv::Rect& crop) {
+  cv::Mat square(crop.height, crop.width, image.type(), cv::Scalar::all(0));
+  const cv::Rect inside = crop & cv::Rect(0, 0, image.cols, image.rows);
+  if (!inside.empty()) image(inside).copyTo(square(inside - crop.tl()));
   return square;
 }
 
@@ -98,17 +101,25 @@ PersonSegmenter::~PersonSegmenter() {
   if (!log_path_.empty()) fs::remove(log_path_, ignored);
 }
 
-PersonSegmentation PersonSegmenter::SegmentCrop(const cv::Mat& bgr, const cv::Rect& crop, const std::string& source) {
-  return RunCrop(bgr, crop, source, false);
+bool PersonSegmentation::found() const {
+  for (std::uint8_t value : mask.data)
+    if (value != 0) return true;
+  return false;
 }
 
-PersonSegmentation PersonSegmenter::RunCrop(const cv::Mat& bgr, const cv::Rect& crop, const std::string& source,
-                                            bool keep_unsure) {
-  if (bgr.empty() || bgr.type() != CV_8UC3) throw UsageError("PersonSegmenter: the image must be 8-bit BGR");
-  if (crop.width <= 0 || crop.width != crop.height) throw UsageError("PersonSegmenter: the crop must be a square");
+PersonSegmentation PersonSegmenter::SegmentCrop(const Image& rgb, const PersonCrop& crop, const std::string& source) {
+  return RunCrop(rgb, crop, source, false);
+}
+
+PersonSegmentation PersonSegmenter::RunCrop(const Image& rgb_image, const PersonCrop& person_crop,
+                                            const std::string& source, bool keep_unsure) {
+  if (rgb_image.empty() || rgb_image.channels != 3 || rgb_image.type != PixelType::kUInt8)
+    throw UsageError("PersonSegmenter: the image must be 8-bit RGB");
+  if (person_crop.side <= 0) throw UsageError("PersonSegmenter: the crop must not be empty");
+  const cv::Mat rgb = AsCvMat(rgb_image);
+  const cv::Rect crop = AsRect(person_crop);
   cv::Mat input;
-  cv::resize(SquareCrop(bgr, crop), input, cv::Size(kSide, kSide), 0, 0, cv::INTER_AREA);
-  cv::cvtColor(input, input, cv::COLOR_BGR2RGB);
+  cv::resize(SquareCrop(rgb, crop), input, cv::Size(kSide, kSide), 0, 0, cv::INTER_AREA);
   std::vector<std::uint8_t> reply(kReplyBytes);
   if (!node_ || !node_->Send(input.data, input.total() * input.elemSize()) || !node_->Receive(reply.data(), reply.size())) {
     const int status = node_ ? node_->Finish() : -1;
@@ -118,18 +129,21 @@ PersonSegmentation PersonSegmenter::RunCrop(const cv::Mat& bgr, const cv::Rect& 
                          (tail.empty() ? "" : ": " + tail));
   }
   PersonSegmentation result;
-  result.crop = crop;
+  result.crop = person_crop;
   const cv::Mat probability(kSide, kSide, CV_8UC1, reply.data());
   cv::Mat scaled;
   cv::resize(probability, scaled, crop.size(), 0, 0, cv::INTER_LINEAR);
-  result.probability = cv::Mat(bgr.size(), CV_8UC1, cv::Scalar::all(0));
-  const cv::Rect inside = crop & cv::Rect(0, 0, bgr.cols, bgr.rows);
-  if (!inside.empty()) scaled(inside - crop.tl()).copyTo(result.probability(inside));
+  cv::Mat full(rgb.size(), CV_8UC1, cv::Scalar::all(0));
+  const cv::Rect inside = crop & cv::Rect(0, 0, rgb.cols, rgb.rows);
+  if (!inside.empty()) scaled(inside - crop.tl()).copyTo(full(inside));
   std::vector<float> numbers(kModelLandmarks * 5 + 1);
   std::memcpy(numbers.data(), reply.data() + kSide * kSide, numbers.size() * sizeof(float));
   result.presence = numbers.back();
-  if (result.presence < options_.min_presence && !keep_unsure) result.probability.setTo(0);
-  cv::compare(result.probability, options_.threshold * 255.0, result.mask, cv::CMP_GT);
+  if (result.presence < options_.min_presence && !keep_unsure) full.setTo(0);
+  cv::Mat mask;
+  cv::compare(full, options_.threshold * 255.0, mask, cv::CMP_GT);
+  result.probability = ImageFromCvMat(full);
+  result.mask = ImageFromCvMat(mask);
   const double scale = static_cast<double>(crop.width) / kSide;
   for (int i = 0; i < kPersonLandmarks; ++i) {
     const float* landmark = numbers.data() + 5 * i;
@@ -140,17 +154,16 @@ PersonSegmentation PersonSegmenter::RunCrop(const cv::Mat& bgr, const cv::Rect& 
   return result;
 }
 
-PersonSegmentation PersonSegmenter::Segment(const cv::Mat& bgr, const std::string& source) {
-  const int whole_side = std::max(bgr.cols, bgr.rows);
+PersonSegmentation PersonSegmenter::Segment(const Image& rgb, const std::string& source) {
+  const int whole_side = std::max(rgb.width, rgb.height);
   // The box comes from the whole image's segmentation even when the model doubts the pose there
   // (a small person); the crops decide.
   PersonSegmentation whole =
-      RunCrop(bgr, cv::Rect((bgr.cols - whole_side) / 2, (bgr.rows - whole_side) / 2, whole_side, whole_side), source,
-              true);
-  const cv::Rect box = LargestPartBox(whole.mask);
+      RunCrop(rgb, {(rgb.width - whole_side) / 2, (rgb.height - whole_side) / 2, whole_side}, source, true);
+  const cv::Rect box = LargestPartBox(AsCvMat(whole.mask));
   if (whole.presence < options_.min_presence) {
-    whole.probability.setTo(0);
-    whole.mask.setTo(0);
+    std::fill(whole.probability.data.begin(), whole.probability.data.end(), 0);
+    std::fill(whole.mask.data.begin(), whole.mask.data.end(), 0);
   }
   if (box.empty()) return whole;
   // The first crop the model is sure of; else the surest crop it found a person in; else the
@@ -159,8 +172,7 @@ PersonSegmentation PersonSegmenter::Segment(const cv::Mat& bgr, const std::strin
   const cv::Point centre(box.x + box.width / 2, box.y + box.height / 2);
   for (double margin : options_.crop_margins) {
     const int side = static_cast<int>(std::ceil(margin * std::max(box.width, box.height)));
-    PersonSegmentation candidate =
-        SegmentCrop(bgr, cv::Rect(centre.x - side / 2, centre.y - side / 2, side, side), source);
+    PersonSegmentation candidate = SegmentCrop(rgb, {centre.x - side / 2, centre.y - side / 2, side}, source);
     if (candidate.presence >= options_.good_presence) return candidate;
     if (best.probability.empty() || candidate.presence > best.presence) best = std::move(candidate);
   }

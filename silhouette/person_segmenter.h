@@ -11,9 +11,10 @@
 #include <Eigen/Core>
 #include <array>
 #include <memory>
-#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
+
+#include "core/image.h"
 
 namespace confluent {
 
@@ -39,15 +40,22 @@ struct PersonSegmenterOptions {
 
 constexpr int kPersonLandmarks = 33;
 
+// A square of an image, in image pixels; it may reach outside the image.
+struct PersonCrop {
+  int x = 0;
+  int y = 0;
+  int side = 0;
+};
+
 struct PersonSegmentation {
-  cv::Mat probability;  // CV_8UC1, the image's size: 255 = certainly the person (0 without a person)
-  cv::Mat mask;         // CV_8UC1, 0/255: probability above the threshold
+  Image probability;  // 1 channel, 8 bits, the image's size: 255 = certainly the person (0 without a person)
+  Image mask;         // 1 channel, 0/255: probability above the threshold
   // Body landmarks (BlazePose order: 0 nose ... 11/12 shoulders, 23/24 hips, 31/32 toes): image
   // pixels x, y and visibility in [0, 1].
   std::array<Eigen::Vector3f, kPersonLandmarks> landmarks{};
   double presence = 0;  // the model's pose-presence score in [0, 1] for the final crop
-  cv::Rect crop;        // the final square crop, image pixels (may reach outside the image)
-  bool found() const { return cv::countNonZero(mask) > 0; }
+  PersonCrop crop;      // the final crop
+  bool found() const;   // the mask holds a pixel
 };
 
 class PersonSegmenter {
@@ -59,14 +67,14 @@ class PersonSegmenter {
   PersonSegmenter(const PersonSegmenter&) = delete;
   PersonSegmenter& operator=(const PersonSegmenter&) = delete;
 
-  // The person in `bgr` (CV_8UC3). `source` names the image in errors.
-  PersonSegmentation Segment(const cv::Mat& bgr, const std::string& source = {});
-  // One pass on the square crop whose corner is `crop.tl()` and side `crop.width`.
-  PersonSegmentation SegmentCrop(const cv::Mat& bgr, const cv::Rect& crop, const std::string& source = {});
+  // The person in `rgb` (8-bit RGB). `source` names the image in errors.
+  PersonSegmentation Segment(const Image& rgb, const std::string& source = {});
+  // One pass on `crop`.
+  PersonSegmentation SegmentCrop(const Image& rgb, const PersonCrop& crop, const std::string& source = {});
 
  private:
   // SegmentCrop, keeping the segmentation of a crop the model finds nobody in when `keep_unsure`.
-  PersonSegmentation RunCrop(const cv::Mat& bgr, const cv::Rect& crop, const std::string& source, bool keep_unsure);
+  PersonSegmentation RunCrop(const Image& rgb, const PersonCrop& crop, const std::string& source, bool keep_unsure);
 
   PersonSegmenterOptions options_;
   std::string script_;

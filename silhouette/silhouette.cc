@@ -266,12 +266,7 @@ Image SilhouetteExtractor::Extract(const Image& frame, int frame_index, MaskSumm
       raw = ImageFromCvMat(foreground);
       break;
     }
-    case SilhouetteMethod::kPerson: {
-      cv::Mat bgr;
-      cv::cvtColor(AsCvMat(rgb), bgr, cv::COLOR_RGB2BGR);
-      raw = ImageFromCvMat(person_->Segment(bgr, source.empty() ? info_.name : source).mask);
-      break;
-    }
+    case SilhouetteMethod::kPerson: raw = person_->Segment(rgb, source.empty() ? info_.name : source).mask; break;
     default: raw = model_.Classify(rgb); break;
   }
   MaskCleanupStats stats;

@@ -10,7 +10,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/cv_interop.h"
 #include "core/error.h"
+#include "core/image_io.h"
 #include "tests/support/test_support.h"
 
 namespace confluent {
@@ -32,11 +34,11 @@ TEST(PersonSegmenter, FindsTheStudioActorAndNobodyInTheEmptyRoom) {
   PersonSegmenter segmenter;
   for (const auto& entry : fs::directory_iterator(capture + "/images")) {
     const std::string camera = entry.path().filename().string();
-    const cv::Mat image = cv::imread(entry.path() / "000000.png", cv::IMREAD_COLOR);
+    const Image image = ReadImage((entry.path() / "000000.png").string());
     const cv::Mat expected = cv::imread(truth + "/masks/" + camera + "/000000.png", cv::IMREAD_GRAYSCALE) > 127;
-    ASSERT_FALSE(image.empty() || expected.empty()) << camera;
+    ASSERT_FALSE(expected.empty()) << camera;
     const PersonSegmentation person = segmenter.Segment(image, camera);
-    const double iou = MaskIoU(person.mask, expected);
+    const double iou = MaskIoU(AsCvMat(person.mask), expected);
     std::printf("%s: IoU %.3f, presence %.2f\n", camera.c_str(), iou, person.presence);
     EXPECT_GE(iou, 0.92) << camera;  // 0.951 to 0.967 measured
     EXPECT_GE(person.presence, 0.5) << camera;
@@ -45,16 +47,16 @@ TEST(PersonSegmenter, FindsTheStudioActorAndNobodyInTheEmptyRoom) {
       const Eigen::Vector3f& p = person.landmarks[landmark];
       cv::Mat near_actor;
       cv::dilate(expected, near_actor, cv::Mat(), cv::Point(-1, -1), 3);
-      ASSERT_TRUE(p.x() >= 0 && p.y() >= 0 && p.x() < image.cols && p.y() < image.rows) << camera << " " << landmark;
+      ASSERT_TRUE(p.x() >= 0 && p.y() >= 0 && p.x() < image.width && p.y() < image.height) << camera << " " << landmark;
       EXPECT_GT(near_actor.at<std::uint8_t>(static_cast<int>(p.y()), static_cast<int>(p.x())), 0)
           << camera << " landmark " << landmark;
     }
-    const cv::Mat plate = cv::imread(capture + "/background/" + camera + ".png", cv::IMREAD_COLOR);
-    ASSERT_FALSE(plate.empty()) << camera;
+    const Image plate = ReadImage(capture + "/background/" + camera + ".png");
     const PersonSegmentation nobody = segmenter.Segment(plate, camera);
+    const double pixels = static_cast<double>(plate.width) * plate.height;
     std::printf("%s empty room: %.4f of the image, presence %.2f\n", camera.c_str(),
-                cv::countNonZero(nobody.mask) / static_cast<double>(plate.total()), nobody.presence);
-    EXPECT_LT(cv::countNonZero(nobody.mask), 0.01 * plate.total()) << camera;
+                cv::countNonZero(AsCvMat(nobody.mask)) / pixels, nobody.presence);
+    EXPECT_LT(cv::countNonZero(AsCvMat(nobody.mask)), 0.01 * pixels) << camera;
   }
 }
 
@@ -89,7 +91,7 @@ TEST(PersonSegmenter, SegmenterThatDiesIsReportedWithItsError) {
   // A segmenter that answers nothing once started.
   testing::WriteFile(dir / "segment.js", "process.stdout.write('CPSEG001'); process.stdin.once('data', () => process.exit(7));\n");
   PersonSegmenter silent(options);
-  const cv::Mat image(120, 160, CV_8UC3, cv::Scalar(90, 120, 150));
+  const Image image(160, 120, 3);
   try {
     silent.Segment(image, "cam00/000000.png");
     ADD_FAILURE() << "no answer was taken as one";
