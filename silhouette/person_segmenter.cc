@@ -108,11 +108,19 @@ bool PersonSegmentation::found() const {
 }
 
 PersonSegmentation PersonSegmenter::SegmentCrop(const Image& rgb, const PersonCrop& crop, const std::string& source) {
-  return RunCrop(rgb, crop, source, false);
+  PersonSegmentation result = RunCrop(rgb, crop, source);
+  DropIfUnsure(&result);
+  return result;
+}
+
+void PersonSegmenter::DropIfUnsure(PersonSegmentation* result) const {
+  if (result->presence >= options_.min_presence) return;
+  std::fill(result->probability.data.begin(), result->probability.data.end(), 0);
+  std::fill(result->mask.data.begin(), result->mask.data.end(), 0);
 }
 
 PersonSegmentation PersonSegmenter::RunCrop(const Image& rgb_image, const PersonCrop& person_crop,
-                                            const std::string& source, bool keep_unsure) {
+                                            const std::string& source) {
   if (rgb_image.empty() || rgb_image.channels != 3 || rgb_image.type != PixelType::kUInt8)
     throw UsageError("PersonSegmenter: the image must be 8-bit RGB");
   if (person_crop.side <= 0) throw UsageError("PersonSegmenter: the crop must not be empty");
@@ -139,7 +147,6 @@ PersonSegmentation PersonSegmenter::RunCrop(const Image& rgb_image, const Person
   std::vector<float> numbers(kModelLandmarks * 5 + 1);
   std::memcpy(numbers.data(), reply.data() + kSide * kSide, numbers.size() * sizeof(float));
   result.presence = numbers.back();
-  if (result.presence < options_.min_presence && !keep_unsure) full.setTo(0);
   cv::Mat mask;
   cv::compare(full, options_.threshold * 255.0, mask, cv::CMP_GT);
   result.probability = ImageFromCvMat(full);
@@ -159,12 +166,9 @@ PersonSegmentation PersonSegmenter::Segment(const Image& rgb, const std::string&
   // The box comes from the whole image's segmentation even when the model doubts the pose there
   // (a small person); the crops decide.
   PersonSegmentation whole =
-      RunCrop(rgb, {(rgb.width - whole_side) / 2, (rgb.height - whole_side) / 2, whole_side}, source, true);
+      RunCrop(rgb, {(rgb.width - whole_side) / 2, (rgb.height - whole_side) / 2, whole_side}, source);
   const cv::Rect box = LargestPartBox(AsCvMat(whole.mask));
-  if (whole.presence < options_.min_presence) {
-    std::fill(whole.probability.data.begin(), whole.probability.data.end(), 0);
-    std::fill(whole.mask.data.begin(), whole.mask.data.end(), 0);
-  }
+  DropIfUnsure(&whole);
   if (box.empty()) return whole;
   // The first crop the model is sure of; else the surest crop it found a person in; else the
   // whole image's answer.

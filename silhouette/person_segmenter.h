@@ -73,8 +73,10 @@ class PersonSegmenter {
   PersonSegmentation SegmentCrop(const Image& rgb, const PersonCrop& crop, const std::string& source = {});
 
  private:
-  // SegmentCrop, keeping the segmentation of a crop the model finds nobody in when `keep_unsure`.
-  PersonSegmentation RunCrop(const Image& rgb, const PersonCrop& crop, const std::string& source, bool keep_unsure);
+  // One pass, keeping the segmentation even where the model finds nobody.
+  PersonSegmentation RunCrop(const Image& rgb, const PersonCrop& crop, const std::string& source);
+  // Empties a result whose presence is below options_.min_presence.
+  void DropIfUnsure(PersonSegmentation* result) const;
 
   PersonSegmenterOptions options_;
   std::string script_;
