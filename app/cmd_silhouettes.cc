@@ -22,6 +22,7 @@ int RunSilhouettes(const ParsedArgs& args, const Context& context) {
   SilhouetteOptions& options = folder_options.silhouettes;
   options.method = ParseSilhouetteMethod(args.get("method", "auto"));
   options.threads = args.get_int("threads", 2);
+  options.person_prior.use = ParsePersonPriorUse(args.get("person-prior", "auto"));
   if (args.has("greenness")) options.chroma.greenness = args.get_double("greenness", 0.0);
   options.Check();
   folder_options.overlays = !args.has("no-overlays");
@@ -60,12 +61,14 @@ CommandSpec MakeSilhouettesCommand() {
       "sudden jump in area). Methods: plate = clean plate background/<cam>.png with a brightness/chromaticity\n"
       "model that ignores shadows; green = chroma key; learned = temporal median of the video; mog2 = OpenCV's\n"
       "mixture model; auto = plate if present, else green if the frames look green, else learned. A missing\n"
-      "plate falls back to the learned background with a warning.";
+      "plate falls back to the learned background with a warning. Without a plate, a person prior (BlazePose)\n"
+      "keeps the learned background's masks near the person it finds (--person-prior).";
   spec.min_positionals = spec.max_positionals = 1;
   spec.options = {
       {"out", "DIR", "output folder (default CAPTURE/masks)"},
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
       {"method", "NAME", "auto (default), plate, green, learned, mog2 or person (a learned person prior, BlazePose)"},
+      {"person-prior", "MODE", "auto (default: when installed), on or off: the person prior for cameras without a plate"},
       {"greenness", "X", "chroma-key threshold in (0, 1) instead of the automatic one"},
       {"threads", "N", "cameras processed in parallel (default 2)"},
       {"compare", "DIR", "reference masks DIR/<cam>/<frame>.png: report IoU per camera (and in the summary)"},

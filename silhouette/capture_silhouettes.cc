@@ -9,6 +9,7 @@
 #include <mutex>
 #include <utility>
 
+#include "core/cv_interop.h"
 #include "core/error.h"
 #include "core/parallel.h"
 #include "silhouette/silhouette.h"
@@ -18,7 +19,9 @@ namespace {
 
 // Replaces the temporal-median extractors of the cameras without a plate by backgrounds learned
 // together (LearnBackgroundsWithoutPlates), when 3 or more cameras can give masks.
-void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& options,
+// With `prior`, the person's regions in the sampled frames guide the learning.
+void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& options, CapturePersonPrior* prior,
+                            const ProgressCallback& progress,
                             std::vector<std::unique_ptr<SilhouetteExtractor>>* extractors) {
   const int n = capture.num_cameras();
   std::vector<BackgroundModel> models(n);
@@ -40,9 +43,29 @@ void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& opt
     if (excluded(c) || (method != SilhouetteMethod::kLearned && method != SilhouetteMethod::kPlate)) return;
     for (int k : samples) frames[c].push_back(ToRgb8(capture.ReadFrame(c, k)));
   });
+  std::unique_ptr<SampledPeople> people;
+  if (prior != nullptr) {
+    people = std::make_unique<SampledPeople>();
+    people->options = prior->options();
+    people->regions.resize(n);
+    std::mutex mutex;  // guards progress reports
+    std::size_t done = 0, total = 0;
+    for (int c = 0; c < n; ++c)
+      if ((*extractors)[c]->info().method == SilhouetteMethod::kLearned) total += frames[c].size();
+    ParallelFor(n, options.threads, [&](int c) {
+      if ((*extractors)[c]->info().method != SilhouetteMethod::kLearned) return;
+      for (std::size_t k = 0; k < frames[c].size(); ++k) {
+        people->regions[c].push_back(
+            prior->Region(c, samples[k], frames[c][k], capture.FramePath(c, samples[k])));
+        std::lock_guard<std::mutex> lock(mutex);
+        ReportProgress(progress, "person prior", ++done, total,
+                       capture.rig().cameras[c].name + " frame " + std::to_string(samples[k]));
+      }
+    });
+  }
   std::vector<std::string> notes;
   models = LearnBackgroundsWithoutPlates(capture.rig(), frames, models, options.background, options.cleanup,
-                                         options.plate_free, &notes, options.threads);
+                                         options.plate_free, &notes, options.threads, people.get());
   for (int c = 0; c < n; ++c) {
     if (excluded(c) || (*extractors)[c]->info().method != SilhouetteMethod::kLearned) continue;
     std::vector<std::string> warnings;
@@ -54,6 +77,14 @@ void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& opt
     (*extractors)[c] = std::make_unique<SilhouetteExtractor>(capture.rig().cameras[c].name, std::move(models[c]),
                                                              std::move(warnings), options);
   }
+}
+
+// `a` and `b` (0/255 masks) both set; empty when `a` is.
+Image Intersect(const Image& a, const Image& b) {
+  if (a.empty()) return a;
+  cv::Mat both;
+  cv::bitwise_and(AsCvMat(a), AsCvMat(b), both);
+  return ImageFromCvMat(both);
 }
 
 // Replaces `*mask` by `corrected` and returns how many pixels changed (reported as corrected).
@@ -95,7 +126,22 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         capture.rig().cameras[c].name, capture.BackgroundPath(c),
         [&capture, c](int frame) { return capture.ReadFrame(c, frame); }, capture.num_frames(), 0, options);
   });
-  if (options.plate_free_multiview) LearnPlateFreeTogether(capture, options, &extractors);
+  // The person prior of the cameras without a plate; in auto mode a missing model is a warning.
+  std::vector<bool> use_prior(num_cameras, false);
+  for (int c = 0; c < num_cameras; ++c) use_prior[c] = extractors[c]->info().method == SilhouetteMethod::kLearned;
+  std::unique_ptr<CapturePersonPrior> prior;
+  std::string prior_warning;
+  if (options.person_prior.use != PersonPriorUse::kOff &&
+      std::find(use_prior.begin(), use_prior.end(), true) != use_prior.end()) {
+    try {
+      prior = std::make_unique<CapturePersonPrior>(options.person, options.person_prior, options.threads);
+    } catch (const InputError& error) {
+      if (options.person_prior.use == PersonPriorUse::kOn) throw;
+      prior_warning = std::string("no person prior for the cameras without a plate (") + error.what() +
+                      "): their masks may keep parts of the room the actor stood in front of";
+    }
+  }
+  if (options.plate_free_multiview) LearnPlateFreeTogether(capture, options, prior.get(), progress, &extractors);
   bool mog2 = false;
   std::vector<bool> correct(num_cameras, false);
   for (int c = 0; c < num_cameras; ++c) {
@@ -125,10 +171,18 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
   for (int f = start; f < end_frame; ++f) {
     std::vector<Image> images(num_cameras), masks(num_cameras);
     std::vector<MaskSummary> checks(num_cameras);
+    std::vector<PersonRegion> people(num_cameras);
+    std::vector<int> prior_changed(num_cameras, 0);
     ParallelFor(num_cameras, options.threads, [&](int c) {
       images[c] = capture.ReadFrame(c, f);
       masks[c] = extractors[c]->Extract(images[c], f, &checks[c], capture.FramePath(c, f));
       checks[c].camera = c;
+      if (prior != nullptr && use_prior[c]) {
+        Image converted;
+        people[c] = prior->Region(c, f, AsRgb8(images[c], &converted), capture.FramePath(c, f));
+        prior_changed[c] = ReplaceMask(
+            &masks[c], CleanMask(KeepNearPerson(masks[c], people[c], options.person_prior), options.cleanup));
+      }
     });
     std::vector<ViewConsistency> views;
     std::vector<Image> hulls, strict_hulls;
@@ -164,12 +218,19 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         cut[c] = 1;
         Image converted;
         const Image& rgb = AsRgb8(images[c], &converted);
+        // What the mask holds of the person prior's core stays (an arm the wall's colour).
         if (options.grabcut_learned)
           views[c].added += ReplaceMask(
-              &masks[c], CleanMask(RefineMaskGrabCut(rgb, masks[c], strict_hulls[c], options.grabcut), options.cleanup));
+              &masks[c], CleanMask(RefineMaskGrabCut(rgb, masks[c], strict_hulls[c], options.grabcut,
+                                                     Intersect(people[c].core, masks[c])),
+                                   options.cleanup));
         const int added = RestoreFeetBelowHull(&masks[c], rgb, capture.rig().cameras[c], underside,
                                                extractors[c]->model(), options.feet);
         if (added > 0) views[c].added += added + ReplaceMask(&masks[c], CleanMask(masks[c], options.cleanup));
+        // The cut may grow into the room again: kept within reach of the person.
+        if (!people[c].region.empty())
+          views[c].removed += ReplaceMask(
+              &masks[c], CleanMask(KeepNearPerson(masks[c], people[c], options.person_prior), options.cleanup));
       });
     }
     if (options.recheck_after_cut && std::find(cut.begin(), cut.end(), 1) != cut.end()) {
@@ -186,16 +247,17 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
     }
     for (int c = 0; c < num_cameras; ++c) {
       MaskSummary& check = checks[c];
+      const int changed = prior_changed[c] + (views.empty() ? 0 : views[c].added + views[c].removed);
+      if (changed > 0) {  // the extractor's checks are of the mask before the changes
+        const MaskSummary again = SummarizeMask(masks[c], previous_fraction[c], options);
+        check.foreground_fraction = again.foreground_fraction;
+        check.empty = again.empty;
+        check.full = again.full;
+        check.touches_border = again.touches_border;
+        check.area_jump = again.area_jump;
+      }
       if (!views.empty()) {
         const ViewConsistency& view = views[c];
-        if (view.added + view.removed > 0) {
-          MaskSummary again = SummarizeMask(masks[c], previous_fraction[c], options);
-          check.foreground_fraction = again.foreground_fraction;
-          check.empty = again.empty;
-          check.full = again.full;
-          check.touches_border = again.touches_border;
-          check.area_jump = again.area_jump;
-        }
         check.hull_explained = view.explained;
         check.hull_covered = view.covered;
         check.hull_volume_m3 = view.hull_volume_m3;
@@ -219,6 +281,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
     });
   }
   summary.warnings = capture.warnings();  // what opening the capture adjusted (sensor padding)
+  if (!prior_warning.empty()) summary.warnings.push_back(prior_warning);
   for (const CameraSilhouetteInfo& info : summary.cameras)
     for (const std::string& warning : info.warnings) summary.warnings.push_back(info.name + ": " + warning);
   summary.trust =

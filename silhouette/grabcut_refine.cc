@@ -58,7 +58,8 @@ Image Cut(const Image& frame, const cv::Mat& m, const cv::Mat& near, const cv::M
 
 }  // namespace
 
-Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull, const GrabCutRefineOptions& options) {
+Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull, const GrabCutRefineOptions& options,
+                        const Image& sure) {
   options.Check();
   const cv::Mat m = AsCvMat(mask);
   if (cv::countNonZero(m) == 0) return mask;
@@ -68,6 +69,11 @@ Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull
   cv::Mat core = m.clone();
   if (!hull.empty()) cv::bitwise_and(core, AsCvMat(hull), core);
   if (options.core > 0) core = ErodeByDisk(core, ScaledRadius(options.core, mask.width));
+  if (!sure.empty()) {
+    if (sure.width != mask.width || sure.height != mask.height)
+      throw UsageError("RefineMaskGrabCut: the sure foreground and the mask differ in size");
+    cv::bitwise_or(core, AsCvMat(sure), core);
+  }
   Image refined = Cut(frame, m, near, core, options.iterations);
   // A cut that gives up much of what the mask held inside the hull has taken a part of the actor
   // for the background (a shirt the wall's colour): cut again with the hull's deep inside as

@@ -25,8 +25,10 @@ struct GrabCutRefineOptions {
 };
 
 // Refines `mask` (1-channel 0/255) of the 8-bit RGB `frame`; `hull` (the others' projected hull,
-// same size, or empty) widens the uncertain band and must contain the certain foreground.
+// same size, or empty) widens the uncertain band and must contain the certain foreground;
+// `sure` (same size, or empty) is certain foreground too (a person prior's core).
 // Returns the mask unchanged when it is empty.
-Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull, const GrabCutRefineOptions& options);
+Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull, const GrabCutRefineOptions& options,
+                        const Image& sure = Image());
 
 }  // namespace confluent

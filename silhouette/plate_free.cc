@@ -51,9 +51,10 @@ BackgroundModel Learn(const std::vector<Image>& frames, const std::vector<Image>
 // First estimate for one camera: where the samples ever differ from the temporal median (the
 // actor passed, or stood), the background is the median image inpainted from around that
 // region, and each pixel keeps the samples nearest to it.
+// With `people`, the person's regions count as changed and as occupied too.
 BackgroundModel FirstEstimate(const std::vector<Image>& frames, const BackgroundModelOptions& options,
                               const MaskCleanupOptions& cleanup, const PlateFreeOptions& plate_free,
-                              const std::string& name, Image* estimate) {
+                              const std::vector<PersonRegion>* people, const std::string& name, Image* estimate) {
   const BackgroundModel median = Learn(frames, {}, {}, options, name);
   const int w = median.width(), h = median.height();
   cv::Mat envelope = cv::Mat::zeros(h, w, CV_8U);
@@ -61,6 +62,13 @@ BackgroundModel FirstEstimate(const std::vector<Image>& frames, const Background
     const Image mask = CleanMask(median.Classify(frame), cleanup);
     cv::bitwise_or(envelope, AsCvMat(mask), envelope);
   }
+  std::vector<cv::Mat> person(frames.size());
+  if (people != nullptr)
+    for (std::size_t k = 0; k < frames.size(); ++k)
+      if (!(*people)[k].region.empty()) {
+        person[k] = Grow(AsCvMat((*people)[k].region), plate_free.occupancy_margin);
+        cv::bitwise_or(envelope, person[k], envelope);
+      }
   envelope = Grow(envelope, plate_free.occupancy_margin);
   const Image mean = median.MeanImage();
   *estimate = InpaintOver(mean, envelope);
@@ -82,7 +90,7 @@ BackgroundModel FirstEstimate(const std::vector<Image>& frames, const Background
     const double brightness = std::sqrt(double(e[0]) * e[0] + double(e[1]) * e[1] + double(e[2]) * e[2]);
     const double limit = nearest + plate_free.nearest_tolerance * sigma + 0.04 * brightness;
     for (std::size_t k = 0; k < frames.size(); ++k)
-      if (distance[k] > limit) occupied[k].data[i] = 255;
+      if (distance[k] > limit || (!person[k].empty() && person[k].data[i] != 0)) occupied[k].data[i] = 255;
   }
   return Learn(frames, occupied, *estimate, options, name);
 }
@@ -146,7 +154,8 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
                                                            const BackgroundModelOptions& background,
                                                            const MaskCleanupOptions& cleanup,
                                                            const PlateFreeOptions& options,
-                                                           std::vector<std::string>* notes, int threads) {
+                                                           std::vector<std::string>* notes, int threads,
+                                                           const SampledPeople* people) {
   options.Check();
   RequireOption(threads >= 1, "LearnBackgroundsWithoutPlates threads", threads, ">= 1");
   background.Check();
@@ -162,11 +171,21 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
       throw UsageError("LearnBackgroundsWithoutPlates: every camera needs the same sampled instants");
   }
   if (samples < 3) throw InputError(n > 0 ? rig.cameras[0].name : "", "a learned background needs at least 3 frames");
+  if (people != nullptr) {
+    people->options.Check();
+    if (static_cast<int>(people->regions.size()) != n)
+      throw UsageError("LearnBackgroundsWithoutPlates: the person regions are needed per camera");
+  }
+  // Camera c's person regions, when it has one per sampled frame.
+  auto person_of = [&](int c) -> const std::vector<PersonRegion>* {
+    return people != nullptr && people->regions[c].size() == samples ? &people->regions[c] : nullptr;
+  };
   std::vector<bool> learn(n, false);
   std::vector<Image> estimate(n);
   for (int c = 0; c < n; ++c) learn[c] = !frames[c].empty() && models[c].empty();
   ParallelFor(n, threads, [&](int c) {
-    if (learn[c]) models[c] = FirstEstimate(frames[c], background, cleanup, options, rig.cameras[c].name, &estimate[c]);
+    if (learn[c]) models[c] = FirstEstimate(frames[c], background, cleanup, options, person_of(c), rig.cameras[c].name,
+                                &estimate[c]);
   });
   MultiViewOptions multiview = options.multiview;
   multiview.threads = threads;
@@ -176,7 +195,10 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
     for (std::size_t k = 0; k < samples; ++k) {
       std::vector<Image> masks(n);
       ParallelFor(n, threads, [&](int c) {
-        if (!frames[c].empty() && !models[c].empty()) masks[c] = CleanMask(models[c].Classify(frames[c][k]), cleanup);
+        if (frames[c].empty() || models[c].empty()) return;
+        masks[c] = CleanMask(models[c].Classify(frames[c][k]), cleanup);
+        if (learn[c] && person_of(c) != nullptr)
+          masks[c] = CleanMask(KeepNearPerson(masks[c], (*person_of(c))[k], people->options), cleanup);
       });
       std::vector<Image> hulls, strict_hulls;
       HullUnderside underside;
@@ -199,6 +221,12 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
                          AsCvMat(ProjectColumnsAboveTop(rig.cameras[c], underside, options.head_room_near_top_m,
                                                         options.head_room_m)),
                          occupancy);
+        // With a person prior: only what lies within reach of the person, and all of the person.
+        const PersonRegion* person = person_of(c) != nullptr ? &(*person_of(c))[k] : nullptr;
+        if (person != nullptr && !person->region.empty()) {
+          occupancy = AsCvMat(KeepNearPerson(ImageFromCvMat(occupancy), *person, people->options)).clone();
+          cv::bitwise_or(occupancy, AsCvMat(person->region), occupancy);
+        }
         occupied[c][k] = ImageFromCvMat(Grow(occupancy, options.occupancy_margin));
         // Colour samples: the actor where the mask and the hull agree (eroded), the background
         // well away from both.

@@ -14,6 +14,7 @@
 #include "silhouette/background_model.h"
 #include "silhouette/mask_cleanup.h"
 #include "silhouette/multiview.h"
+#include "silhouette/person_prior.h"
 
 namespace confluent {
 
@@ -46,17 +47,26 @@ struct PlateFreeOptions {
   void Check() const;
 };
 
+// Where a person prior (silhouette/person_prior.h) found the actor in the sampled frames:
+// `regions[c][k]` for camera c's frame k (empty for a camera without, or nobody found).
+struct SampledPeople {
+  std::vector<std::vector<PersonRegion>> regions;
+  PersonPriorOptions options;
+};
+
 // `frames[c]` are the sampled frames of camera c (8-bit RGB, the same instants for every
 // camera, at least 3). `models[c]` holds a model already known (a plate) that is kept, or an
 // empty model for a camera to learn; cameras with an empty `frames[c]` are left out. Returns
 // the models; `notes` receives one line per camera learned. Work is spread over up to `threads`
-// threads; the result does not depend on their number.
+// threads; the result does not depend on their number. With `people`, the actor's samples are
+// those of the person's regions, and the occupancy and masks are kept within reach of them (a
+// region with nobody found leaves that frame to the other cameras alone).
 std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const std::vector<std::vector<Image>>& frames,
                                                            std::vector<BackgroundModel> models,
                                                            const BackgroundModelOptions& background,
                                                            const MaskCleanupOptions& cleanup,
                                                            const PlateFreeOptions& options,
                                                            std::vector<std::string>* notes = nullptr,
-                                                           int threads = 1);
+                                                           int threads = 1, const SampledPeople* people = nullptr);
 
 }  // namespace confluent

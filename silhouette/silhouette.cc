@@ -52,6 +52,7 @@ void SilhouetteOptions::Check() const {
   RequireOption(max_parts >= 1, owner + "max_parts", max_parts, ">= 1");
   plate_free.Check();
   person.Check();
+  person_prior.Check();
   grabcut.Check();
   feet.Check();
 }

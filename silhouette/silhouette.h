@@ -16,6 +16,7 @@
 #include "silhouette/grabcut_refine.h"
 #include "silhouette/mask_cleanup.h"
 #include "silhouette/multiview.h"
+#include "silhouette/person_prior.h"
 #include "silhouette/person_segmenter.h"
 #include "silhouette/plate_free.h"
 
@@ -55,7 +56,10 @@ struct SilhouetteOptions {
   // other cameras' hulls (silhouette/plate_free.h); false: each its own temporal median.
   bool plate_free_multiview = true;
   PlateFreeOptions plate_free;
-  PersonSegmenterOptions person;  // the person method
+  PersonSegmenterOptions person;  // the person method, and the person prior's segmenter
+  // Cameras without a plate (learned) keep their masks, and their backgrounds' samples of the
+  // actor, within reach of where a person prior finds the person (silhouette/person_prior.h).
+  PersonPriorOptions person_prior;
   // Every frame's masks are checked against the other cameras' hulls (a confidence per
   // camera-frame); the masks of cameras without a plate are also corrected by it.
   bool multiview_check = true;

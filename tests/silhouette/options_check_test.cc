@@ -26,6 +26,11 @@ TEST(SilhouetteOptions, CheckNamesTheFieldAndTheValue) {
   options = SilhouetteOptions();
   options.threads = 0;
   testing::ExpectCheckRefuses(options, "SilhouetteOptions.threads = 0: must be in [1, 256]");
+  options = SilhouetteOptions();
+  options.person_prior.reach = -0.1;
+  testing::ExpectCheckRefuses(options, "PersonPriorOptions.reach = -0.1: must be in [0, 1]");
+  EXPECT_EQ(ParsePersonPriorUse("off"), PersonPriorUse::kOff);
+  EXPECT_THROW(ParsePersonPriorUse("yes"), UsageError);
 }
 
 }  // namespace
