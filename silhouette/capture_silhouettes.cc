@@ -43,11 +43,9 @@ void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& opt
     if (excluded(c) || (method != SilhouetteMethod::kLearned && method != SilhouetteMethod::kPlate)) return;
     for (int k : samples) frames[c].push_back(ToRgb8(capture.ReadFrame(c, k)));
   });
-  std::unique_ptr<SampledPeople> people;
+  std::vector<std::vector<PersonRegion>> people;
   if (prior != nullptr) {
-    people = std::make_unique<SampledPeople>();
-    people->options = prior->options();
-    people->regions.resize(n);
+    people.resize(n);
     std::mutex mutex;  // guards progress reports
     std::size_t done = 0, total = 0;
     for (int c = 0; c < n; ++c)
@@ -55,8 +53,8 @@ void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& opt
     ParallelFor(n, options.threads, [&](int c) {
       if ((*extractors)[c]->info().method != SilhouetteMethod::kLearned) return;
       for (std::size_t k = 0; k < frames[c].size(); ++k) {
-        people->regions[c].push_back(
-            prior->Region(c, samples[k], frames[c][k], capture.FramePath(c, samples[k])));
+        people[c].push_back(
+            prior->Region(c, samples[k], frames[c][k], capture.FramePath(c, samples[k]), true));
         std::lock_guard<std::mutex> lock(mutex);
         ReportProgress(progress, "person prior", ++done, total,
                        capture.rig().cameras[c].name + " frame " + std::to_string(samples[k]));
@@ -65,7 +63,8 @@ void LearnPlateFreeTogether(const Capture& capture, const SilhouetteOptions& opt
   }
   std::vector<std::string> notes;
   models = LearnBackgroundsWithoutPlates(capture.rig(), frames, models, options.background, options.cleanup,
-                                         options.plate_free, &notes, options.threads, people.get());
+                                         options.plate_free, &notes, options.threads,
+                                         prior != nullptr ? &people : nullptr);
   for (int c = 0; c < n; ++c) {
     if (excluded(c) || (*extractors)[c]->info().method != SilhouetteMethod::kLearned) continue;
     std::vector<std::string> warnings;
@@ -181,7 +180,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         Image converted;
         people[c] = prior->Region(c, f, AsRgb8(images[c], &converted), capture.FramePath(c, f));
         prior_changed[c] = ReplaceMask(
-            &masks[c], CleanMask(KeepNearPerson(masks[c], people[c], options.person_prior), options.cleanup));
+            &masks[c], CleanMask(KeepNearPerson(masks[c], people[c]), options.cleanup));
       }
     });
     std::vector<ViewConsistency> views;
@@ -230,7 +229,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         // The cut may grow into the room again: kept within reach of the person.
         if (!people[c].region.empty())
           views[c].removed += ReplaceMask(
-              &masks[c], CleanMask(KeepNearPerson(masks[c], people[c], options.person_prior), options.cleanup));
+              &masks[c], CleanMask(KeepNearPerson(masks[c], people[c]), options.cleanup));
       });
     }
     if (options.recheck_after_cut && std::find(cut.begin(), cut.end(), 1) != cut.end()) {

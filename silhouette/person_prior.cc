@@ -56,16 +56,17 @@ PersonRegion MakePersonRegion(const PersonSegmentation& person, const PersonPrio
   cv::Mat core;
   cv::compare(AsCvMat(person.probability), options.core_probability * 255.0, core, cv::CMP_GT);
   result.core = ImageFromCvMat(core);
+  result.within_reach =
+      ImageFromCvMat(DilateByDisk(region, static_cast<int>(std::lround(options.reach * result.height_px))));
   return result;
 }
 
-Image KeepNearPerson(const Image& mask, const PersonRegion& person, const PersonPriorOptions& options) {
-  if (person.region.empty()) return mask;
-  if (person.region.width != mask.width || person.region.height != mask.height)
+Image KeepNearPerson(const Image& mask, const PersonRegion& person) {
+  if (person.within_reach.empty()) return mask;
+  if (person.within_reach.width != mask.width || person.within_reach.height != mask.height)
     throw UsageError("KeepNearPerson: the person's region and the mask differ in size");
-  const int reach = static_cast<int>(std::lround(options.reach * person.height_px));
   cv::Mat kept;
-  cv::bitwise_and(AsCvMat(mask), DilateByDisk(AsCvMat(person.region), reach), kept);
+  cv::bitwise_and(AsCvMat(mask), AsCvMat(person.within_reach), kept);
   return ImageFromCvMat(kept);
 }
 
@@ -113,7 +114,8 @@ void CapturePersonPrior::Release(std::unique_ptr<PersonSegmenter> segmenter) {
   released_.notify_one();
 }
 
-PersonRegion CapturePersonPrior::Region(int camera, int frame, const Image& rgb, const std::string& source) {
+PersonRegion CapturePersonPrior::Region(int camera, int frame, const Image& rgb, const std::string& source,
+                                        bool keep) {
   const std::pair<int, int> key(camera, frame);
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -121,14 +123,13 @@ PersonRegion CapturePersonPrior::Region(int camera, int frame, const Image& rgb,
     if (found != kept_.end()) {
       PersonRegion result;
       result.height_px = found->second.height_px;
-      if (!found->second.png.empty()) {
+      if (!found->second.png.empty()) {  // 85 = within reach, 170 = the region too, 255 = the core too
         const cv::Mat levels = cv::imdecode(found->second.png, cv::IMREAD_GRAYSCALE);
-        cv::Mat region, core;
-        cv::compare(levels, 0, region, cv::CMP_GT);
-        cv::compare(levels, 255, core, cv::CMP_EQ);
-        result.region = ImageFromCvMat(region);
-        result.core = ImageFromCvMat(core);
+        result.within_reach = ImageFromCvMat(levels > 0);
+        result.region = ImageFromCvMat(levels >= 170);
+        result.core = ImageFromCvMat(levels == 255);
       }
+      kept_.erase(found);
       return result;
     }
   }
@@ -142,10 +143,12 @@ PersonRegion CapturePersonPrior::Region(int camera, int frame, const Image& rgb,
   }
   Release(std::move(segmenter));
   PersonRegion result = MakePersonRegion(person, options_);
+  if (!keep) return result;
   Kept kept;
   kept.height_px = result.height_px;
-  if (!result.region.empty()) {  // one image: 128 = the region, 255 = the core too
-    cv::Mat levels = AsCvMat(result.region) / 2;
+  if (!result.region.empty()) {
+    cv::Mat levels = AsCvMat(result.within_reach) / 3;
+    levels.setTo(170, AsCvMat(result.region));
     levels.setTo(255, AsCvMat(result.core));
     cv::imencode(".png", levels, kept.png);
   }

@@ -47,21 +47,23 @@ struct PersonPriorOptions {
 };
 
 // Where the person may be in one image (1 channel, 0/255, the image's size), with the person's
-// height in pixels; an empty Image when the model found nobody.
+// height in pixels; empty Images when the model found nobody.
 struct PersonRegion {
   Image region;
-  Image core;  // where the person surely is (within the region)
+  Image core;          // where the person surely is (within the region)
+  Image within_reach;  // the region grown by PersonPriorOptions::reach
   double height_px = 0;
 };
 PersonRegion MakePersonRegion(const PersonSegmentation& person, const PersonPriorOptions& options);
 
-// `mask` (0/255) without what lies farther than `options.reach` from `person.region`; unchanged
-// when the region is empty (nobody found: the prior does not know).
-Image KeepNearPerson(const Image& mask, const PersonRegion& person, const PersonPriorOptions& options);
+// `mask` (0/255) without what lies outside `person.within_reach`; unchanged when the region is
+// empty (nobody found: the prior does not know).
+Image KeepNearPerson(const Image& mask, const PersonRegion& person);
 
 // Person regions of a capture's camera-frames for several threads: up to `processes`
-// segmenters (Node processes) started as needed, each used by one thread at a time, and every
-// region kept (PNG-compressed) so that a frame is segmented once.
+// segmenters (Node processes) started as needed, each used by one thread at a time. A region
+// asked for with `keep` (the background's sampled frames) is kept, PNG-compressed, until it is
+// asked for again (that frame's extraction), so that a frame is segmented once.
 class CapturePersonPrior {
  public:
   // Starts one segmenter, so that a missing model throws InputError here (see PersonSegmenter).
@@ -72,8 +74,7 @@ class CapturePersonPrior {
 
   // The region of camera `camera` at `frame`, whose image is `rgb` (8-bit RGB); `source`
   // names the image in errors.
-  PersonRegion Region(int camera, int frame, const Image& rgb, const std::string& source);
-  const PersonPriorOptions& options() const { return options_; }
+  PersonRegion Region(int camera, int frame, const Image& rgb, const std::string& source, bool keep = false);
 
  private:
   std::unique_ptr<PersonSegmenter> Acquire();

@@ -155,7 +155,7 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
                                                            const MaskCleanupOptions& cleanup,
                                                            const PlateFreeOptions& options,
                                                            std::vector<std::string>* notes, int threads,
-                                                           const SampledPeople* people) {
+                                                           const std::vector<std::vector<PersonRegion>>* people) {
   options.Check();
   RequireOption(threads >= 1, "LearnBackgroundsWithoutPlates threads", threads, ">= 1");
   background.Check();
@@ -171,14 +171,11 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
       throw UsageError("LearnBackgroundsWithoutPlates: every camera needs the same sampled instants");
   }
   if (samples < 3) throw InputError(n > 0 ? rig.cameras[0].name : "", "a learned background needs at least 3 frames");
-  if (people != nullptr) {
-    people->options.Check();
-    if (static_cast<int>(people->regions.size()) != n)
-      throw UsageError("LearnBackgroundsWithoutPlates: the person regions are needed per camera");
-  }
+  if (people != nullptr && static_cast<int>(people->size()) != n)
+    throw UsageError("LearnBackgroundsWithoutPlates: the person regions are needed per camera");
   // Camera c's person regions, when it has one per sampled frame.
   auto person_of = [&](int c) -> const std::vector<PersonRegion>* {
-    return people != nullptr && people->regions[c].size() == samples ? &people->regions[c] : nullptr;
+    return people != nullptr && (*people)[c].size() == samples ? &(*people)[c] : nullptr;
   };
   std::vector<bool> learn(n, false);
   std::vector<Image> estimate(n);
@@ -198,7 +195,7 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
         if (frames[c].empty() || models[c].empty()) return;
         masks[c] = CleanMask(models[c].Classify(frames[c][k]), cleanup);
         if (learn[c] && person_of(c) != nullptr)
-          masks[c] = CleanMask(KeepNearPerson(masks[c], (*person_of(c))[k], people->options), cleanup);
+          masks[c] = CleanMask(KeepNearPerson(masks[c], (*person_of(c))[k]), cleanup);
       });
       std::vector<Image> hulls, strict_hulls;
       HullUnderside underside;
@@ -224,7 +221,7 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
         // With a person prior: only what lies within reach of the person, and all of the person.
         const PersonRegion* person = person_of(c) != nullptr ? &(*person_of(c))[k] : nullptr;
         if (person != nullptr && !person->region.empty()) {
-          occupancy = AsCvMat(KeepNearPerson(ImageFromCvMat(occupancy), *person, people->options)).clone();
+          cv::bitwise_and(occupancy, AsCvMat(person->within_reach), occupancy);
           cv::bitwise_or(occupancy, AsCvMat(person->region), occupancy);
         }
         occupied[c][k] = ImageFromCvMat(Grow(occupancy, options.occupancy_margin));

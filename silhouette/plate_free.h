@@ -47,18 +47,13 @@ struct PlateFreeOptions {
   void Check() const;
 };
 
-// Where a person prior (silhouette/person_prior.h) found the actor in the sampled frames:
-// `regions[c][k]` for camera c's frame k (empty for a camera without, or nobody found).
-struct SampledPeople {
-  std::vector<std::vector<PersonRegion>> regions;
-  PersonPriorOptions options;
-};
-
 // `frames[c]` are the sampled frames of camera c (8-bit RGB, the same instants for every
 // camera, at least 3). `models[c]` holds a model already known (a plate) that is kept, or an
 // empty model for a camera to learn; cameras with an empty `frames[c]` are left out. Returns
 // the models; `notes` receives one line per camera learned. Work is spread over up to `threads`
-// threads; the result does not depend on their number. With `people`, the actor's samples are
+// threads; the result does not depend on their number. With `people` (`(*people)[c][k]`: where
+// a person prior, silhouette/person_prior.h, found the actor in camera c's sampled frame k; no
+// regions for a camera without), the actor's samples are
 // those of the person's regions, and the occupancy and masks are kept within reach of them (a
 // region with nobody found leaves that frame to the other cameras alone).
 std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const std::vector<std::vector<Image>>& frames,
@@ -67,6 +62,7 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
                                                            const MaskCleanupOptions& cleanup,
                                                            const PlateFreeOptions& options,
                                                            std::vector<std::string>* notes = nullptr,
-                                                           int threads = 1, const SampledPeople* people = nullptr);
+                                                           int threads = 1,
+                                                           const std::vector<std::vector<PersonRegion>>* people = nullptr);
 
 }  // namespace confluent

@@ -69,16 +69,16 @@ TEST(PersonPrior, MasksKeepWhatLiesWithinReachOfThePersonOnly) {
   m(cv::Rect(40, 20, 20, 160)).setTo(255);  // the body
   m(cv::Rect(60, 100, 6, 20)).setTo(255);   // a rim 6 pixels wide beside it (a shadow, a loose shirt)
   m(cv::Rect(80, 150, 15, 15)).setTo(255);  // a ghost of the room 20 pixels away
-  const Image kept = KeepNearPerson(mask, region, options);
+  const Image kept = KeepNearPerson(mask, region);
   const cv::Mat k = AsCvMat(kept);
   EXPECT_EQ(cv::countNonZero(k(cv::Rect(40, 20, 20, 160))), 20 * 160);
   EXPECT_EQ(cv::countNonZero(k(cv::Rect(60, 100, 6, 20))), 6 * 20);
   EXPECT_EQ(cv::countNonZero(k(cv::Rect(80, 150, 15, 15))), 0);
   // Without a region (the prior found nobody) the mask is not touched.
-  const Image untouched = KeepNearPerson(mask, PersonRegion{}, options);
+  const Image untouched = KeepNearPerson(mask, PersonRegion{});
   EXPECT_EQ(untouched.data, mask.data);
   // A region of another size is a usage error, not a wrong mask.
-  EXPECT_THROW(KeepNearPerson(Image(50, 50, 1), region, options), UsageError);
+  EXPECT_THROW(KeepNearPerson(Image(50, 50, 1), region), UsageError);
 }
 
 // A stand-in for segment.js: the same protocol, every crop answered with a person in its middle
@@ -114,12 +114,13 @@ TEST(PersonPrior, CaptureRegionsAreSegmentedOnceAndADeadSegmenterIsReplaced) {
   segmenter.script = StandInSegmenter(dir, 2);
   CapturePersonPrior prior(segmenter, PersonPriorOptions{}, 2);
   const Image image(300, 300, 3);
-  const PersonRegion first = prior.Region(0, 7, image, "cam00/000007.png");
+  const PersonRegion first = prior.Region(0, 7, image, "cam00/000007.png", true);
   ASSERT_FALSE(first.region.empty());
   EXPECT_GT(first.height_px, 30);
   EXPECT_EQ(At(first.region, 150, 150), 255);
   EXPECT_EQ(At(first.region, 10, 10), 0);
   // Asked again, the kept region comes back without the segmenter, which has answered its 2 crops.
+  // (Kept ones are given back once: the background's samples, then that frame's extraction.)
   const PersonRegion again = prior.Region(0, 7, image, "cam00/000007.png");
   EXPECT_EQ(again.region.data, first.region.data);
   EXPECT_EQ(again.core.data, first.core.data);
