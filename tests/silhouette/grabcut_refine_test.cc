@@ -84,6 +84,33 @@ TEST(GrabCutRefine, CutsAgainWhenTheFirstCutLosesWhatTheHullHolds) {
   EXPECT_GT(Iou(again, body.truth), Iou(first, body.truth) + 0.2);
 }
 
+// The same shirt, one cut only, with a person prior's core as certain foreground (the torso's
+// inside): what the mask holds of it stays.
+TEST(GrabCutRefine, SureForegroundStaysThroughTheCut) {
+  const Body body(kWall + cv::Scalar(8, 6, -6));
+  Image mask = body.truth;
+  cv::Mat m = AsCvMat(mask);
+  for (int y = 40; y < 150; y += 12) m(cv::Rect(0, y, kGrabWidth, 4)).setTo(0, AsCvMat(body.torso)(cv::Rect(0, y, kGrabWidth, 4)));
+  GrabCutRefineOptions once;
+  once.retry_drop = 1;
+  Image sure = body.torso;
+  cv::erode(AsCvMat(sure), AsCvMat(sure), cv::getStructuringElement(cv::MORPH_ELLIPSE, {9, 9}));
+  cv::bitwise_and(AsCvMat(sure), m, AsCvMat(sure));
+  const Image without = RefineMaskGrabCut(body.frame, mask, {}, once);
+  const Image with = RefineMaskGrabCut(body.frame, mask, {}, once, sure);
+  int lost_without = 0, lost_with = 0, sure_pixels = 0;
+  for (std::size_t i = 0; i < sure.data.size(); ++i) {
+    if (sure.data[i] == 0) continue;
+    ++sure_pixels;
+    lost_without += without.data[i] == 0;
+    lost_with += with.data[i] == 0;
+  }
+  std::printf("sure pixels %d: lost by the cut %d, with them certain %d\n", sure_pixels, lost_without, lost_with);
+  EXPECT_GT(lost_without, sure_pixels / 2);  // the failure the sure foreground is for
+  EXPECT_EQ(lost_with, 0);
+  EXPECT_THROW(RefineMaskGrabCut(body.frame, mask, {}, once, Image(10, 10, 1)), UsageError);
+}
+
 TEST(GrabCutRefine, BadOptionsAreNamed) {
   GrabCutRefineOptions options;
   options.retry_drop = 1.5;
