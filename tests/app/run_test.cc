@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -22,40 +23,87 @@ namespace fs = std::filesystem;
 using testing::RunConfluent;
 using testing::CountFiles;
 
-// One tiny capture (4 ring + 2 held-out cameras, 160x120, 10 frames at 12.5 fps) for the suite.
+// Refinement keyframes at frames 0, 3, 6 and 9: a run resumed at frame 1, 4 or 8 replays the
+// frames since the keyframe (pipeline/frame_refinement.h).
+std::vector<std::string> RunArgs(const std::string& capture, const std::string& run) {
+  return {"run", capture, "--out", run, "--exclude-camera", "holdout0", "--exclude-camera", "holdout1",
+          "--render-width", "160", "--render-height", "120", "--refine-keyframes", "3"};
+}
+
+// Makes the suite's tiny capture (4 ring + 2 held-out cameras, 160x120, 10 frames at 12.5 fps) in
+// `root`/capture, its ground truth in `root`/capture_gt.
+void MakeCapture(const std::string& root) {
+  const testing::CommandResult synth =
+      RunConfluent({"synth", "--preset", "tiny", "--fps", "12.5", "--out", root + "/capture"});
+  ASSERT_EQ(synth.exit_code, 0) << synth.stderr_text;
+}
+
+// Makes the uninterrupted run of RunArgs in `root`/reference_run; returns what it printed.
+std::string MakeReferenceRun(const std::string& root) {
+  const testing::CommandResult result = RunConfluent(RunArgs(root + "/capture", root + "/reference_run"));
+  EXPECT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
+  return result.stdout_text + result.stderr_text;
+}
+
+// Under ctest, the capture and the reference run are made once for every test of the suite by
+// the RunCommandReference fixture (tests/CMakeLists.txt), in $CONFLUENT_RUN_REFERENCE; the test
+// binary run alone makes its own.
 class RunCommandTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
+    const char* shared = std::getenv("CONFLUENT_RUN_REFERENCE");
+    if (shared != nullptr && *shared != '\0') {
+      root_ = shared;
+      ASSERT_TRUE(fs::exists(root_ + "/reference_run/run.json") && fs::exists(root_ + "/reference_run.log"))
+          << "the RunCommandReference fixture left no run in " << root_;
+      return;
+    }
     dir_ = new testing::TempDir();
-    const testing::CommandResult synth =
-        RunConfluent({"synth", "--preset", "tiny", "--fps", "12.5", "--out", *dir_ / "capture"});
-    ASSERT_EQ(synth.exit_code, 0) << synth.stderr_text;
+    root_ = dir_->path();
+    MakeCapture(root_);
   }
   static void TearDownTestSuite() {
     delete dir_;
     dir_ = nullptr;
   }
-  static std::string Capture() { return *dir_ / "capture"; }
-  static std::string Truth() { return *dir_ / "capture_gt"; }
-  // Refinement keyframes at frames 0, 3, 6 and 9: a run resumed at frame 1, 4 or 8 replays the
-  // frames since the keyframe (pipeline/frame_refinement.h).
-  static std::vector<std::string> RunArgs(const std::string& run) {
-    return {"run", Capture(), "--out", run, "--exclude-camera", "holdout0", "--exclude-camera", "holdout1",
-            "--render-width", "160", "--render-height", "120", "--refine-keyframes", "3"};
-  }
+  static std::string Capture() { return root_ + "/capture"; }
+  static std::string Truth() { return root_ + "/capture_gt"; }
+  static std::vector<std::string> RunArgs(const std::string& run) { return confluent::RunArgs(Capture(), run); }
   // An uninterrupted run of RunArgs, made once for the suite (do not modify it).
   static const std::string& ReferenceRun() {
     static const std::string run = [] {
-      const std::string path = *dir_ / "reference_run";
-      const testing::CommandResult result = RunConfluent(RunArgs(path));
-      EXPECT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
-      return path;
+      if (dir_ != nullptr && !fs::exists(root_ + "/reference_run.log")) {
+        std::ofstream(root_ + "/reference_run.log") << MakeReferenceRun(root_);
+      }
+      return root_ + "/reference_run";
     }();
     return run;
   }
+  // What the reference run printed.
+  static std::string ReferenceRunLog() {
+    ReferenceRun();
+    std::ifstream in(root_ + "/reference_run.log");
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
   static testing::TempDir* dir_;
+  static std::string root_;
 };
 testing::TempDir* RunCommandTest::dir_ = nullptr;
+std::string RunCommandTest::root_;
+
+// The RunCommandReference fixture of ctest: the capture and the reference run, made into
+// $CONFLUENT_RUN_REFERENCE_OUT for the RunCommandTest suite's processes to share.
+TEST(RunCommandReference, MakesTheCaptureAndTheUninterruptedRun) {
+  const char* out = std::getenv("CONFLUENT_RUN_REFERENCE_OUT");
+  if (out == nullptr || *out == '\0') GTEST_SKIP() << "made only as ctest's RunCommandReference fixture";
+  const std::string root = out;
+  fs::remove_all(root);
+  fs::create_directories(root);
+  MakeCapture(root);
+  const std::string log = MakeReferenceRun(root);
+  ASSERT_FALSE(HasFailure());
+  std::ofstream(root + "/reference_run.log") << log;
+}
 
 std::map<std::string, fs::file_time_type> ModificationTimes(const std::string& root) {
   std::map<std::string, fs::file_time_type> times;
@@ -131,9 +179,9 @@ void ExpectEveryFileParses(const std::string& root, const std::string& when) {
 
 TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
   testing::TempDir out;
-  const std::string run = out / "run";
-  const testing::CommandResult result = RunConfluent(RunArgs(run));
-  ASSERT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
+  const std::string run = out / "run";  // evaluate writes into it
+  fs::copy(ReferenceRun(), run, fs::copy_options::recursive);
+  const std::string printed = ReferenceRunLog();
   for (const char* file : {"run.json", "timings.csv", "poses.json", "motion.bvh", "correspondences.json",
                            "template_reference.ply"})
     EXPECT_TRUE(fs::exists(fs::path(run) / file)) << file;
@@ -142,9 +190,7 @@ TEST_F(RunCommandTest, CaptureToThreeDVideoAndHeldOutEvaluation) {
   EXPECT_EQ(CountFiles(run + "/scan", ".ply"), 10);
   EXPECT_EQ(CountFiles(run + "/renders/orbit", ".png"), 10);
   // Every frame went through the silhouette and then the photo-consistency refinement.
-  EXPECT_NE((result.stdout_text + result.stderr_text).find("photo refinement: mean flow between neighbouring cameras"),
-            std::string::npos)
-      << result.stdout_text;
+  EXPECT_NE(printed.find("photo refinement: mean flow between neighbouring cameras"), std::string::npos) << printed;
   std::ifstream timings(run + "/timings.csv");
   int photo_rows = 0;
   for (std::string line; std::getline(timings, line);) photo_rows += line.rfind("photo_refine,", 0) == 0;
