@@ -218,11 +218,13 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         Image converted;
         const Image& rgb = AsRgb8(images[c], &converted);
         // What the mask holds of the person prior's core stays (an arm the wall's colour).
-        if (options.grabcut_learned)
-          views[c].added += ReplaceMask(
-              &masks[c], CleanMask(RefineMaskGrabCut(rgb, masks[c], strict_hulls[c], options.grabcut,
-                                                     Intersect(people[c].core, masks[c])),
-                                   options.cleanup));
+        if (options.grabcut_learned) {
+          Image refined = RefineMaskGrabCut(rgb, masks[c], strict_hulls[c], options.grabcut,
+                                            Intersect(people[c].core, masks[c]));
+          // What it added beside the body that the background knows goes back (a poster).
+          TakeBackKnownBackground(&refined, masks[c], rgb, extractors[c]->model(), strict_hulls[c]);
+          views[c].added += ReplaceMask(&masks[c], CleanMask(refined, options.cleanup));
+        }
         const int added = RestoreFeetBelowHull(&masks[c], rgb, capture.rig().cameras[c], underside,
                                                extractors[c]->model(), options.feet);
         if (added > 0) views[c].added += added + ReplaceMask(&masks[c], CleanMask(masks[c], options.cleanup));

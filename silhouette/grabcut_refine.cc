@@ -94,4 +94,26 @@ Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull
   return refined;
 }
 
+int TakeBackKnownBackground(Image* refined, const Image& mask, const Image& frame, const BackgroundModel& model,
+                            const Image& hull) {
+  if (hull.empty()) return 0;
+  const int w = refined->width, h = refined->height;
+  for (const Image* image : {&mask, &frame, &hull})
+    if (image->width != w || image->height != h)
+      throw UsageError("TakeBackKnownBackground: the mask, frame, hull and refined mask differ in size");
+  if (model.width() != w || model.height() != h)
+    throw UsageError("TakeBackKnownBackground: the background model and the mask differ in size");
+  Image labels;
+  model.Classify(frame, &labels);
+  int taken = 0;
+  const std::size_t pixels = static_cast<std::size_t>(w) * h;
+  for (std::size_t i = 0; i < pixels; ++i)
+    if (refined->data[i] != 0 && mask.data[i] == 0 && hull.data[i] == 0 &&
+        labels.data[i] == static_cast<std::uint8_t>(PixelClass::kBackground)) {
+      refined->data[i] = 0;
+      ++taken;
+    }
+  return taken;
+}
+
 }  // namespace confluent

@@ -5,6 +5,7 @@
 // actor-coloured gaps.
 
 #include "core/image.h"
+#include "silhouette/background_model.h"
 
 namespace confluent {
 
@@ -30,5 +31,13 @@ struct GrabCutRefineOptions {
 // Returns the mask unchanged when it is empty.
 Image RefineMaskGrabCut(const Image& frame, const Image& mask, const Image& hull, const GrabCutRefineOptions& options,
                         const Image& sure = Image());
+
+// Takes back from `refined` what the cut added to `mask` (in `refined`, not in `mask`) outside
+// `hull` (the others' strict hull, or empty: nothing taken back) where `model` sees its own
+// background in `frame` (8-bit RGB; class kBackground, not a shadow or highlight): a poster in
+// the shirt's colours beside the body, which a background learned without a plate knows.
+// Returns the pixels taken back. Throws UsageError when the sizes differ.
+int TakeBackKnownBackground(Image* refined, const Image& mask, const Image& frame, const BackgroundModel& model,
+                            const Image& hull);
 
 }  // namespace confluent

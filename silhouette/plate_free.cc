@@ -22,6 +22,8 @@ void PlateFreeOptions::Check() const {
                 head_room_near_top_m, "in [0, 2]");
   RequireOption(background_colour > 0.5 && background_colour <= 1, owner + "background_colour", background_colour,
                 "in (0.5, 1]");
+  RequireOption(stable_free_samples >= 0 && stable_free_samples <= 1000, owner + "stable_free_samples",
+                stable_free_samples, "in [0, 1000]");
   RequireOption(nearest_tolerance > 0 && nearest_tolerance <= 100, owner + "nearest_tolerance", nearest_tolerance,
                 "in (0, 100]");
   multiview.Check();
@@ -147,6 +149,49 @@ Image InpaintNeverFree(const Image& first_estimate, const std::vector<Image>& oc
   return InpaintOver(first_estimate, never_free);
 }
 
+// Frees, at each pixel that `occupied` leaves with too few free samples, the samples that
+// `hull_occupied` (what the other cameras' hulls alone claim) leaves free and whose colours agree
+// with at least `options.stable_free_samples` - 1 others of them: the colour that keeps coming back
+// whenever the actor is elsewhere is the background's. Returns the pixels given free samples.
+int FreeStableSamplesOutsideHulls(const std::vector<Image>& frames, const std::vector<Image>& hull_occupied,
+                                  double noise_sigma, const PlateFreeOptions& options, std::vector<Image>* occupied) {
+  const int needed = options.stable_free_samples;
+  if (needed <= 0) return 0;
+  const std::size_t pixels = static_cast<std::size_t>(frames[0].width) * frames[0].height, samples = frames.size();
+  const double sigma = std::max(1.0, noise_sigma);
+  std::vector<std::size_t> candidates;
+  std::vector<int> agreeing;
+  int given = 0;
+  for (std::size_t i = 0; i < pixels; ++i) {
+    int free = 0;
+    for (std::size_t k = 0; k < samples && free < BackgroundModel::kMinFreeSamples; ++k) free += (*occupied)[k].data[i] == 0;
+    if (free >= BackgroundModel::kMinFreeSamples) continue;
+    candidates.clear();
+    for (std::size_t k = 0; k < samples; ++k)
+      if (hull_occupied[k].data[i] == 0) candidates.push_back(k);
+    if (static_cast<int>(candidates.size()) < needed) continue;
+    // The candidate with the most others of its colour, and those others.
+    agreeing.assign(candidates.size(), 0);
+    auto agree = [&](std::size_t a, std::size_t b) {
+      const std::uint8_t* u = &frames[a].data[i * 3];
+      const std::uint8_t* v = &frames[b].data[i * 3];
+      double d2 = 0, b2 = 0;
+      for (int c = 0; c < 3; ++c) d2 += (double(u[c]) - v[c]) * (double(u[c]) - v[c]), b2 += double(u[c]) * u[c];
+      const double limit = options.nearest_tolerance * sigma + 0.04 * std::sqrt(b2);
+      return d2 <= limit * limit;
+    };
+    for (std::size_t a = 0; a < candidates.size(); ++a)
+      for (std::size_t b = a + 1; b < candidates.size(); ++b)
+        if (agree(candidates[a], candidates[b])) ++agreeing[a], ++agreeing[b];
+    const std::size_t best = std::max_element(agreeing.begin(), agreeing.end()) - agreeing.begin();
+    if (agreeing[best] + 1 < needed) continue;
+    for (std::size_t a = 0; a < candidates.size(); ++a)
+      if (a == best || agree(candidates[best], candidates[a])) (*occupied)[candidates[a]].data[i] = 0;
+    ++given;
+  }
+  return given;
+}
+
 }  // namespace
 
 std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const std::vector<std::vector<Image>>& frames,
@@ -187,7 +232,8 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
   MultiViewOptions multiview = options.multiview;
   multiview.threads = threads;
   for (int round = 0; round < options.iterations; ++round) {
-    std::vector<std::vector<Image>> occupied(n, std::vector<Image>(samples));
+    std::vector<std::vector<Image>> occupied(n, std::vector<Image>(samples)),
+        hull_occupied(n, std::vector<Image>(samples));
     std::vector<ColourPrior> priors(n);
     for (std::size_t k = 0; k < samples; ++k) {
       std::vector<Image> masks(n);
@@ -202,12 +248,21 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
       CheckMultiView(rig, &masks, learn, multiview, &hulls, &strict_hulls, &underside);
       ParallelFor(n, threads, [&](int c) {
         if (!learn[c]) return;
-        // The strict hull counts too: it leaves out the cameras whose masks it does not explain,
-        // so it keeps a still actor (a head, a torso) that several cameras' masks miss, which the
-        // tolerant hull loses.
+        // The occupancy: the mask, the tolerant hull and the strict one. The strict hull leaves
+        // out the cameras whose masks it does not explain, so it keeps a still actor (a head, a
+        // torso) that several cameras' masks miss, which the tolerant hull loses.
         cv::Mat occupancy = AsCvMat(masks[c]).clone();
         if (!hulls[c].empty()) cv::bitwise_or(occupancy, AsCvMat(hulls[c]), occupancy);
         if (!strict_hulls[c].empty()) cv::bitwise_or(occupancy, AsCvMat(strict_hulls[c]), occupancy);
+        // Below, with a person prior, a pixel that the occupancy never leaves free may still be a
+        // still background (a poster that the masks and the prior take for the actor) where the
+        // strict hull leaves it free. The prior vouches for that hull: the first estimate took the
+        // person's regions out of the background, so the masks, and the hull, hold even a still
+        // person. (Without it a still leg is missing from the hull; and the room below and above
+        // the hull, next, is too coarse: it covers the poster beside a side-on torso.)
+        if (options.stable_free_samples > 0 && person_of(c) != nullptr)
+          hull_occupied[c][k] = strict_hulls[c].empty() ? Image(frames[c][k].width, frames[c][k].height, 1)
+                                                        : strict_hulls[c];
         // And what lies below the hull down to the floor: a performer who stands still is found
         // only where they move (a shirt, the arms), but their legs and feet are below.
         if (options.columns_to_floor)
@@ -245,6 +300,8 @@ std::vector<BackgroundModel> LearnBackgroundsWithoutPlates(const Rig& rig, const
           if (p >= options.background_colour) occupied[c][k].data[i] = 0;
           else if (p <= 1.0 - options.background_colour) occupied[c][k].data[i] = 255;
         }
+      if (options.stable_free_samples > 0 && person_of(c) != nullptr)
+        FreeStableSamplesOutsideHulls(frames[c], hull_occupied[c], models[c].noise_sigma(), options, &occupied[c]);
       models[c] = Learn(frames[c], occupied[c], InpaintNeverFree(estimate[c], occupied[c]), background,
                         rig.cameras[c].name);
     });

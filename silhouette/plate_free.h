@@ -3,8 +3,11 @@
 // calibrated rig together: per-pixel statistics over the frames where the pixel is free, the
 // occupancy coming from the masks and from the visual hulls of the other cameras, iterated.
 // Robust to an actor who stays in place: where the temporal median holds the actor, the first
-// estimate is the surrounding background filled in (inpainted) and the samples nearest to it;
-// a pixel that the occupancy never leaves free takes the background inpainted around it.
+// estimate is the surrounding background filled in (inpainted) and the samples nearest to it.
+// A pixel that the occupancy never leaves free takes the background inpainted around it; with a
+// person prior, the colour that keeps coming back in the samples where the geometry alone (the
+// others' strict hull) leaves it free, if any (a poster behind the actor, shown whenever they
+// step aside).
 
 #include <string>
 #include <vector>
@@ -42,6 +45,12 @@ struct PlateFreeOptions {
   // too: a sample whose colour is background with at least this probability is free even under
   // the occupancy (a ghost's true background), one that is the actor's with it never is.
   double background_colour = 0.9;
+  // With a person prior, a pixel that the occupancy never leaves free (a poster behind the actor,
+  // which the prior and the masks take for the actor) takes the samples where the geometry alone
+  // leaves it free (outside the others' strict hull), when at least this many of them agree on
+  // one colour (within nearest_tolerance): a still background seen between the actor's moves.
+  // 0 = off.
+  int stable_free_samples = 3;
   MultiViewOptions multiview;
   // Throws UsageError naming the bad field.
   void Check() const;

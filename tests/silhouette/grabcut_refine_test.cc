@@ -8,6 +8,7 @@
 
 #include "core/cv_interop.h"
 #include "core/error.h"
+#include "silhouette/background_model.h"
 #include "silhouette/grabcut_refine.h"
 #include "tests/silhouette/synthetic_scene.h"
 
@@ -109,6 +110,53 @@ TEST(GrabCutRefine, SureForegroundStaysThroughTheCut) {
   EXPECT_GT(lost_without, sure_pixels / 2);  // the failure the sure foreground is for
   EXPECT_EQ(lost_with, 0);
   EXPECT_THROW(RefineMaskGrabCut(body.frame, mask, {}, once, Image(10, 10, 1)), UsageError);
+}
+
+// A poster in the shirt's red beside the torso: the cut takes its near part for the shirt; the
+// background model (here from a plate) knows it, and outside the hull it is taken back. What
+// the cut filled inside the hull (a hole in the shirt) stays.
+TEST(GrabCutRefine, WhatTheCutAddsThatTheBackgroundKnowsOutsideTheHullIsTakenBack) {
+  const cv::Scalar red(200, 60, 50);
+  const Body body(red);
+  const cv::Rect poster_box(150, 55, 30, 70);  // touching the torso's right side
+  Image plate(kGrabWidth, kGrabHeight, 3), frame = body.frame, poster(kGrabWidth, kGrabHeight, 1);
+  AsCvMat(plate)(cv::Rect(0, 0, kGrabWidth, 130)).setTo(kWall);
+  AsCvMat(plate)(cv::Rect(0, 130, kGrabWidth, kGrabHeight - 130)).setTo(kFloor);
+  for (int y = poster_box.y; y < poster_box.y + poster_box.height; ++y)
+    AsCvMat(plate)(cv::Rect(poster_box.x, y, poster_box.width, 1)).setTo(y % 8 < 5 ? red : cv::Scalar(30, 30, 30));
+  testing::AddNoise(&plate, 3.0, 6);
+  for (std::size_t i = 0; i < body.truth.data.size(); ++i) {
+    const int x = static_cast<int>(i % kGrabWidth), y = static_cast<int>(i / kGrabWidth);
+    if (body.truth.data[i] != 0 || !poster_box.contains({x, y})) continue;
+    poster.data[i] = 255;
+    for (int c = 0; c < 3; ++c) frame.data[i * 3 + c] = plate.data[i * 3 + c];
+  }
+  Image mask = body.truth;
+  cv::circle(AsCvMat(mask), {110, 100}, 9, cv::Scalar(0), cv::FILLED);  // a hole in the shirt
+  Image hull = body.truth;
+  cv::dilate(AsCvMat(hull), AsCvMat(hull), cv::getStructuringElement(cv::MORPH_ELLIPSE, {5, 5}));
+  const BackgroundModel model = BackgroundModel::FromPlates({plate}, {});
+  const Image cut = RefineMaskGrabCut(frame, mask, hull, {});
+  Image kept = cut;
+  const int taken = TakeBackKnownBackground(&kept, mask, frame, model, hull);
+  const auto count = [](const Image& a, const Image& b, bool b_set) {
+    int n = 0;
+    for (std::size_t i = 0; i < a.data.size(); ++i) n += a.data[i] != 0 && (b.data[i] != 0) == b_set;
+    return n;
+  };
+  const int hole = count(body.truth, mask, false);
+  std::printf("poster pixels in the cut %d, after taking back %d (%d taken); hole %d: filled %d, after %d\n",
+              count(cut, poster, true), count(kept, poster, true), taken, hole, hole - count(body.truth, cut, false),
+              hole - count(body.truth, kept, false));
+  ASSERT_GT(count(cut, poster, true), 50);  // the failure this is for
+  Image outside_hull = hull;
+  cv::bitwise_not(AsCvMat(hull), AsCvMat(outside_hull));
+  Image poster_outside = poster;
+  cv::bitwise_and(AsCvMat(poster), AsCvMat(outside_hull), AsCvMat(poster_outside));
+  EXPECT_EQ(count(kept, poster_outside, true), 0);
+  EXPECT_EQ(count(body.truth, kept, false), count(body.truth, cut, false));  // the hole's filling stays
+  EXPECT_EQ(TakeBackKnownBackground(&kept, mask, frame, model, {}), 0);       // no hull: nothing taken
+  EXPECT_THROW(TakeBackKnownBackground(&kept, Image(10, 10, 1), frame, model, hull), UsageError);
 }
 
 TEST(GrabCutRefine, BadOptionsAreNamed) {

@@ -82,10 +82,12 @@ TEST(SilhouettesCli, WithoutAnyPlateTheCamerasLearnTogetherWithThePersonPriorAnd
   ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
   EXPECT_EQ(run.stderr_text.find("no person prior"), std::string::npos) << run.stderr_text;
   const auto [mean, worst] = ReportedIou(run.stdout_text);
-  // Measured 0.907 / 0.672 (4+2 cameras of 160x120, 10 frames of a whole performance: the hardest
-  // of the generated captures for a background learned from the video).
-  EXPECT_GE(mean, 0.88) << run.stdout_text;
-  EXPECT_GE(worst, 0.6) << run.stdout_text;
+  // Measured 0.942 / 0.718 (4+2 cameras of 160x120, 10 frames of a whole performance: the hardest
+  // of the generated captures for a background learned from the video); 0.907 / 0.672 before the
+  // background took the samples a poster keeps coming back in and the graph cut gave back what
+  // that background knows.
+  EXPECT_GE(mean, 0.92) << run.stdout_text;
+  EXPECT_GE(worst, 0.65) << run.stdout_text;
   EXPECT_NE(run.stderr_text.find("without a plate (pixels the actor covers excluded through the other cameras"),
             std::string::npos)
       << run.stderr_text;
