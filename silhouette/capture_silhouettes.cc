@@ -172,6 +172,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
     std::vector<MaskSummary> checks(num_cameras);
     std::vector<PersonRegion> people(num_cameras);
     std::vector<int> prior_changed(num_cameras, 0);
+    std::vector<Image> unbounded(num_cameras);  // the masks before the prior bounded them
     ParallelFor(num_cameras, options.threads, [&](int c) {
       images[c] = capture.ReadFrame(c, f);
       masks[c] = extractors[c]->Extract(images[c], f, &checks[c], capture.FramePath(c, f));
@@ -179,6 +180,7 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
       if (prior != nullptr && use_prior[c]) {
         Image converted;
         people[c] = prior->Region(c, f, AsRgb8(images[c], &converted), capture.FramePath(c, f));
+        unbounded[c] = masks[c];
         prior_changed[c] = ReplaceMask(
             &masks[c], CleanMask(KeepNearPerson(masks[c], people[c]), options.cleanup));
       }
@@ -217,6 +219,14 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         cut[c] = 1;
         Image converted;
         const Image& rgb = AsRgb8(images[c], &converted);
+        // What the prior took away but the others' strict hull holds comes back: a head or a
+        // hand that the prior lost in this frame while the other cameras see it.
+        if (!unbounded[c].empty() && !strict_hulls[c].empty()) {
+          cv::Mat back;
+          cv::bitwise_and(AsCvMat(unbounded[c]), AsCvMat(strict_hulls[c]), back);
+          cv::bitwise_or(AsCvMat(masks[c]), back, back);
+          views[c].added += ReplaceMask(&masks[c], CleanMask(ImageFromCvMat(back), options.cleanup));
+        }
         // What the mask holds of the person prior's core stays (an arm the wall's colour).
         if (options.grabcut_learned) {
           Image refined = RefineMaskGrabCut(rgb, masks[c], strict_hulls[c], options.grabcut,
@@ -228,10 +238,11 @@ SilhouetteSummary ExtractSilhouettes(const Capture& capture, int first_frame, in
         const int added = RestoreFeetBelowHull(&masks[c], rgb, capture.rig().cameras[c], underside,
                                                extractors[c]->model(), options.feet);
         if (added > 0) views[c].added += added + ReplaceMask(&masks[c], CleanMask(masks[c], options.cleanup));
-        // The cut may grow into the room again: kept within reach of the person.
+        // The cut may grow into the room again: kept within reach of the person, or of the others'
+        // strict hull.
         if (!people[c].region.empty())
           views[c].removed += ReplaceMask(
-              &masks[c], CleanMask(KeepNearPerson(masks[c], people[c]), options.cleanup));
+              &masks[c], CleanMask(KeepNearPerson(masks[c], people[c], strict_hulls[c]), options.cleanup));
       });
     }
     if (options.recheck_after_cut && std::find(cut.begin(), cut.end(), 1) != cut.end()) {

@@ -61,12 +61,16 @@ PersonRegion MakePersonRegion(const PersonSegmentation& person, const PersonPrio
   return result;
 }
 
-Image KeepNearPerson(const Image& mask, const PersonRegion& person) {
+Image KeepNearPerson(const Image& mask, const PersonRegion& person, const Image& also) {
   if (person.within_reach.empty()) return mask;
   if (person.within_reach.width != mask.width || person.within_reach.height != mask.height)
     throw UsageError("KeepNearPerson: the person's region and the mask differ in size");
-  cv::Mat kept;
-  cv::bitwise_and(AsCvMat(mask), AsCvMat(person.within_reach), kept);
+  if (!also.empty() && (also.width != mask.width || also.height != mask.height))
+    throw UsageError("KeepNearPerson: the mask and what else it may keep differ in size");
+  cv::Mat near, kept;
+  if (also.empty()) near = AsCvMat(person.within_reach);
+  else cv::bitwise_or(AsCvMat(person.within_reach), AsCvMat(also), near);
+  cv::bitwise_and(AsCvMat(mask), near, kept);
   return ImageFromCvMat(kept);
 }
 

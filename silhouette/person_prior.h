@@ -56,9 +56,11 @@ struct PersonRegion {
 };
 PersonRegion MakePersonRegion(const PersonSegmentation& person, const PersonPriorOptions& options);
 
-// `mask` (0/255) without what lies outside `person.within_reach`; unchanged when the region is
-// empty (nobody found: the prior does not know).
-Image KeepNearPerson(const Image& mask, const PersonRegion& person);
+// `mask` (0/255) without what lies outside `person.within_reach`, except what `also` holds (same
+// size, or empty: the other cameras' strict hull, where they see the person: a head that the
+// prior lost in one frame); unchanged when the region is empty (nobody found: the prior does not
+// know).
+Image KeepNearPerson(const Image& mask, const PersonRegion& person, const Image& also = Image());
 
 // Person regions of a capture's camera-frames for several threads: up to `processes`
 // segmenters (Node processes) started as needed, each used by one thread at a time. A region

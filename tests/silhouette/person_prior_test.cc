@@ -60,7 +60,7 @@ TEST(PersonPrior, RegionHoldsTheSegmentationAndTheLimbsTheLandmarksAreSureOf) {
   EXPECT_TRUE(MakePersonRegion(nobody, options).region.empty());
 }
 
-TEST(PersonPrior, MasksKeepWhatLiesWithinReachOfThePersonOnly) {
+TEST(PersonPrior, MasksKeepWhatLiesWithinReachOfThePersonOrInTheOthersHullOnly) {
   PersonPriorOptions options;
   options.reach = 0.05;  // 8 pixels for the 160-pixel person
   const PersonRegion region = MakePersonRegion(StandingPerson(), options);
@@ -77,8 +77,16 @@ TEST(PersonPrior, MasksKeepWhatLiesWithinReachOfThePersonOnly) {
   // Without a region (the prior found nobody) the mask is not touched.
   const Image untouched = KeepNearPerson(mask, PersonRegion{});
   EXPECT_EQ(untouched.data, mask.data);
+  // What the other cameras' strict hull holds stays too (a part the prior lost in this frame),
+  // and only that.
+  Image hull(mask.width, mask.height, 1);
+  AsCvMat(hull)(cv::Rect(80, 150, 15, 8)).setTo(255);
+  const cv::Mat seen = AsCvMat(KeepNearPerson(mask, region, hull));
+  EXPECT_EQ(cv::countNonZero(seen(cv::Rect(80, 150, 15, 15))), 15 * 8);
+  EXPECT_EQ(cv::countNonZero(seen), cv::countNonZero(k) + 15 * 8);
   // A region of another size is a usage error, not a wrong mask.
   EXPECT_THROW(KeepNearPerson(Image(50, 50, 1), region), UsageError);
+  EXPECT_THROW(KeepNearPerson(mask, region, Image(50, 50, 1)), UsageError);
 }
 
 // A stand-in for segment.js: the same protocol, every crop answered with a person in its middle
