@@ -81,7 +81,8 @@ TEST(PersonPrior, MasksKeepWhatLiesWithinReachOfThePersonOrInTheOthersHullOnly) 
   // and only that.
   Image hull(mask.width, mask.height, 1);
   AsCvMat(hull)(cv::Rect(80, 150, 15, 8)).setTo(255);
-  const cv::Mat seen = AsCvMat(KeepNearPerson(mask, region, hull));
+  const Image kept_with_hull = KeepNearPerson(mask, region, hull);
+  const cv::Mat seen = AsCvMat(kept_with_hull);
   EXPECT_EQ(cv::countNonZero(seen(cv::Rect(80, 150, 15, 15))), 15 * 8);
   EXPECT_EQ(cv::countNonZero(seen), cv::countNonZero(k) + 15 * 8);
   // A region of another size is a usage error, not a wrong mask.
