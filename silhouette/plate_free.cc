@@ -50,6 +50,21 @@ BackgroundModel Learn(const std::vector<Image>& frames, const std::vector<Image>
   return model;
 }
 
+// How far (RGB distance) a sample may lie from a colour and still be that colour: the noise
+// (`sigma` grey levels, times the tolerance) plus 4% of the colour's brightness.
+double ColourTolerance(const std::uint8_t* rgb, double sigma, const PlateFreeOptions& options) {
+  const double brightness = std::sqrt(double(rgb[0]) * rgb[0] + double(rgb[1]) * rgb[1] + double(rgb[2]) * rgb[2]);
+  return options.nearest_tolerance * sigma + 0.04 * brightness;
+}
+
+// Whether pixel i is free (unoccupied) in fewer than BackgroundModel::kMinFreeSamples samples.
+bool TooFewFreeSamples(const std::vector<Image>& occupied, std::size_t i) {
+  int free = 0;
+  for (std::size_t k = 0; k < occupied.size() && free < BackgroundModel::kMinFreeSamples; ++k)
+    free += occupied[k].data[i] == 0;
+  return free < BackgroundModel::kMinFreeSamples;
+}
+
 // First estimate for one camera: where the samples ever differ from the temporal median (the
 // actor passed, or stood), the background is the median image inpainted from around that
 // region, and each pixel keeps the samples nearest to it.
@@ -89,8 +104,7 @@ BackgroundModel FirstEstimate(const std::vector<Image>& frames, const Background
       distance[k] = std::sqrt(d2);
       nearest = std::min(nearest, distance[k]);
     }
-    const double brightness = std::sqrt(double(e[0]) * e[0] + double(e[1]) * e[1] + double(e[2]) * e[2]);
-    const double limit = nearest + plate_free.nearest_tolerance * sigma + 0.04 * brightness;
+    const double limit = nearest + ColourTolerance(e, sigma, plate_free);
     for (std::size_t k = 0; k < frames.size(); ++k)
       if (distance[k] > limit || (!person[k].empty() && person[k].data[i] != 0)) occupied[k].data[i] = 255;
   }
@@ -136,12 +150,8 @@ Image InpaintNeverFree(const Image& first_estimate, const std::vector<Image>& oc
   const std::size_t pixels = static_cast<std::size_t>(first_estimate.width) * first_estimate.height;
   cv::Mat never_free = cv::Mat::zeros(first_estimate.height, first_estimate.width, CV_8U);
   bool any = false;
-  const int enough = BackgroundModel::kMinFreeSamples;
-  for (std::size_t i = 0; i < pixels; ++i) {
-    int free = 0;
-    for (std::size_t k = 0; k < occupied.size() && free < enough; ++k) free += occupied[k].data[i] == 0;
-    if (free < enough) never_free.data[i] = 255, any = true;
-  }
+  for (std::size_t i = 0; i < pixels; ++i)
+    if (TooFewFreeSamples(occupied, i)) never_free.data[i] = 255, any = true;
   if (!any) return first_estimate;
   // Grown a little, so that the fill starts from the background around them and not from
   // their own rim.
@@ -150,36 +160,33 @@ Image InpaintNeverFree(const Image& first_estimate, const std::vector<Image>& oc
 }
 
 // Frees, at each pixel that `occupied` leaves with too few free samples, the samples that
-// `hull_occupied` (what the other cameras' hulls alone claim) leaves free and whose colours agree
-// with at least `options.stable_free_samples` - 1 others of them: the colour that keeps coming back
-// whenever the actor is elsewhere is the background's. Returns the pixels given free samples.
-int FreeStableSamplesOutsideHulls(const std::vector<Image>& frames, const std::vector<Image>& hull_occupied,
-                                  double noise_sigma, const PlateFreeOptions& options, std::vector<Image>* occupied) {
+// `hull_occupied` (what the other cameras' strict hull claims) leaves free and whose colours
+// agree with at least `options.stable_free_samples` - 1 others of them: the colour that keeps
+// coming back whenever the actor is elsewhere is the background's.
+void FreeStableSamplesOutsideHulls(const std::vector<Image>& frames, const std::vector<Image>& hull_occupied,
+                                   double noise_sigma, const PlateFreeOptions& options, std::vector<Image>* occupied) {
   const int needed = options.stable_free_samples;
-  if (needed <= 0) return 0;
+  if (needed <= 0) return;
   const std::size_t pixels = static_cast<std::size_t>(frames[0].width) * frames[0].height, samples = frames.size();
   const double sigma = std::max(1.0, noise_sigma);
   std::vector<std::size_t> candidates;
   std::vector<int> agreeing;
-  int given = 0;
   for (std::size_t i = 0; i < pixels; ++i) {
-    int free = 0;
-    for (std::size_t k = 0; k < samples && free < BackgroundModel::kMinFreeSamples; ++k) free += (*occupied)[k].data[i] == 0;
-    if (free >= BackgroundModel::kMinFreeSamples) continue;
+    if (!TooFewFreeSamples(*occupied, i)) continue;
     candidates.clear();
     for (std::size_t k = 0; k < samples; ++k)
       if (hull_occupied[k].data[i] == 0) candidates.push_back(k);
     if (static_cast<int>(candidates.size()) < needed) continue;
     // The candidate with the most others of its colour, and those others.
-    agreeing.assign(candidates.size(), 0);
     auto agree = [&](std::size_t a, std::size_t b) {
       const std::uint8_t* u = &frames[a].data[i * 3];
       const std::uint8_t* v = &frames[b].data[i * 3];
-      double d2 = 0, b2 = 0;
-      for (int c = 0; c < 3; ++c) d2 += (double(u[c]) - v[c]) * (double(u[c]) - v[c]), b2 += double(u[c]) * u[c];
-      const double limit = options.nearest_tolerance * sigma + 0.04 * std::sqrt(b2);
+      double d2 = 0;
+      for (int c = 0; c < 3; ++c) d2 += (double(u[c]) - v[c]) * (double(u[c]) - v[c]);
+      const double limit = ColourTolerance(u, sigma, options);
       return d2 <= limit * limit;
     };
+    agreeing.assign(candidates.size(), 0);
     for (std::size_t a = 0; a < candidates.size(); ++a)
       for (std::size_t b = a + 1; b < candidates.size(); ++b)
         if (agree(candidates[a], candidates[b])) ++agreeing[a], ++agreeing[b];
@@ -187,9 +194,7 @@ int FreeStableSamplesOutsideHulls(const std::vector<Image>& frames, const std::v
     if (agreeing[best] + 1 < needed) continue;
     for (std::size_t a = 0; a < candidates.size(); ++a)
       if (a == best || agree(candidates[best], candidates[a])) (*occupied)[candidates[a]].data[i] = 0;
-    ++given;
   }
-  return given;
 }
 
 }  // namespace
