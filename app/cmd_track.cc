@@ -34,6 +34,7 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
   inputs.tracker.fit.downscale = args.get_int("downscale", inputs.tracker.fit.downscale);
   inputs.tracker.fit.num_threads = args.get_int("threads", inputs.tracker.fit.num_threads);
   inputs.tracker.Check();
+  inputs.landmarks = !args.has("no-landmarks");
   TrackingReportOptions report_options;
   report_options.overlay_every = args.get_int("overlay-every", report_options.overlay_every);
   report_options.gt_joints_path = args.get("gt-joints");
@@ -42,10 +43,12 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
   TimingLog timings(inputs.folder.Path("timings.csv"));
   const BodyTemplate body;
   BodyShape shape;
-  RunTrackingStage(inputs, body, context.make_progress(), &timings, &shape);
+  const StageReport tracked = RunTrackingStage(inputs, body, context.make_progress(), &timings, &shape);
   const TrackingReport report = ReportTracking(inputs, body, report_options, context.make_progress());
   for (const std::string& line : report.frame_lines) std::printf("%s\n", line.c_str());
   for (const std::string& line : report.summary_lines) std::printf("%s\n", line.c_str());
+  for (const std::string& note : tracked.notes)
+    if (note.find("landmarks") != std::string::npos) std::printf("%s\n", note.c_str());
   std::printf("poses in %s, motion in %s, meshes in %s\n", inputs.folder.Path("poses.json").c_str(),
               inputs.folder.Path("motion.bvh").c_str(), inputs.folder.Path("template").c_str());
   return 0;
@@ -61,13 +64,15 @@ CommandSpec MakeTrackCommand() {
   spec.description =
       "Initialises the body template automatically on the first frame (placement from the visual hull, then a\n"
       "joint shape-and-pose fit) and tracks it frame by frame with Ceres (silhouette distance transforms,\n"
-      "contour rays, constant-velocity prediction, bad-frame recovery). Reads CAPTURE/masks/<cam>/<frame>.png\n"
-      "(or --masks DIR). Excluded (held-out) cameras are not used; when their masks exist, their overlap is\n"
-      "reported. Writes RUN/poses.json, RUN/motion.bvh (Y-up, cm), RUN/template/<frame>.ply (face label =\n"
-      "segment), RUN/tracking/<frame>.json (the state a re-run resumes from: finished frames are kept),\n"
-      "RUN/overlap.csv (IoU per frame and camera), RUN/overlays/<cam>/<frame>.png (template contour red, mask\n"
-      "green), RUN/tracking_frames.csv (seconds, CPU seconds and iterations per frame), RUN/timings.csv and\n"
-      "RUN/track_summary.json, and prints a per-frame summary.";
+      "contour rays, constant-velocity prediction, bad-frame recovery, lost limbs searched again and, where\n"
+      "Node.js and BlazePose are installed, turned towards the body landmarks that the cameras agree on). Reads\n"
+      "CAPTURE/masks/<cam>/<frame>.png (or --masks DIR). Excluded (held-out) cameras are not used; when their\n"
+      "masks exist, their overlap is reported. Writes RUN/poses.json, RUN/motion.bvh (Y-up, cm),\n"
+      "RUN/template/<frame>.ply (face label = segment), RUN/tracking/<frame>.json (the state a re-run resumes\n"
+      "from: finished frames are kept), RUN/overlap.csv (IoU per frame and camera),\n"
+      "RUN/overlays/<cam>/<frame>.png (template contour red, mask green), RUN/tracking_frames.csv (seconds, CPU\n"
+      "seconds and iterations per frame), RUN/timings.csv and RUN/track_summary.json, and prints a per-frame\n"
+      "summary.";
   spec.min_positionals = spec.max_positionals = 1;
   spec.options = {
       {"out", "RUN", "output folder", false, true},
@@ -78,6 +83,7 @@ CommandSpec MakeTrackCommand() {
       {"overlay-every", "N", "write overlays every N frames (default 25; 0 = none)"},
       {"downscale", "N", "mask reduction for fitting (default 0 = automatic, about 256 px across)"},
       {"threads", "N", "solver threads (default 2)"},
+      {"no-landmarks", "", "do not ask BlazePose's landmarks where a limb is ambiguous (first frame, lost limbs)"},
   };
   spec.run = RunTrack;
   return spec;

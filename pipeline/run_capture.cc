@@ -63,6 +63,7 @@ std::string RunCapture(const RunOptions& options, const std::function<ProgressCa
   inputs.refine_keyframes = options.refine_keyframes;
   inputs.refine_photo = options.refine_silhouettes && options.refine_photo;
   inputs.threads = options.threads;
+  inputs.landmarks = options.landmarks;
 
   fs::create_directories(inputs.folder.root);
   const int stale_temporaries = RemoveStaleTemporaries(inputs.folder.root);

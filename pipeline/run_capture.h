@@ -27,6 +27,7 @@ struct RunOptions {
   int refine_iterations = 18;
   int refine_keyframes = 1;            // RunInputs::refine_keyframes
   bool refine_photo = true;
+  bool landmarks = true;               // RunInputs::landmarks
   bool render = true;                  // the orbit 3D video
   RenderStageOptions render_options;
   int threads = 2;

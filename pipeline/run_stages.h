@@ -37,6 +37,9 @@ struct RunInputs {
   int refine_keyframes = 1;
   bool refine_photo = true;          // then make neighbouring used cameras agree on the texture
   TrackerOptions tracker;            // of the tracking stage
+  // BlazePose's landmarks settle limbs the silhouettes leave ambiguous, at the first frame and
+  // where a limb seems lost (pipeline/frame_landmarks.h; skipped with a note without Node.js).
+  bool landmarks = true;
 };
 
 // How much a stage did.

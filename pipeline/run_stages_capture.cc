@@ -14,6 +14,7 @@
 #include "core/mesh_io.h"
 #include "silhouette/silhouette.h"
 #include "tracking/motion_io.h"
+#include "pipeline/frame_landmarks.h"
 #include "tracking/tracker.h"
 
 namespace confluent {
@@ -161,6 +162,10 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
   fs::create_directories(inputs.folder.Path("tracking"));
   fs::create_directories(inputs.folder.Path("template"));
   Tracker tracker(rig, inputs.cameras.held_out_mask(), inputs.tracker);
+  std::vector<bool> tracking_cameras = inputs.cameras.held_out_mask();
+  tracking_cameras.flip();
+  FrameLandmarks landmarks(*inputs.capture, tracking_cameras);
+  if (inputs.landmarks) tracker.UseLandmarks([&landmarks](int frame) { return landmarks.Joints(frame); });
   auto read_state = [&](int frame) {
     PosesFile state = ReadPosesJson(inputs.folder.TrackingStatePath(frame), body, camera_names);
     if (state.frames.size() != 1) throw InputError(inputs.folder.TrackingStatePath(frame), "expected one frame");
@@ -205,6 +210,7 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
     if (report.computed % 10 == 0) timings->Save();
   }
   timings->Save();
+  report.notes.insert(report.notes.end(), landmarks.notes().begin(), landmarks.notes().end());
 
   // poses.json and motion.bvh over every frame tracked so far (all shards).
   std::vector<TrackedFrame> frames;

@@ -57,11 +57,21 @@ const char* LimbName(Limb limb) {
   return "limb";
 }
 
+LimbChain LimbJoints(Limb limb) {
+  switch (limb) {
+    case Limb::kLeftArm: return {kJointLeftShoulder, kJointLeftElbow, kJointLeftWrist};
+    case Limb::kRightArm: return {kJointRightShoulder, kJointRightElbow, kJointRightWrist};
+    case Limb::kLeftLeg: return {kJointLeftHip, kJointLeftKnee, kJointLeftAnkle};
+    case Limb::kRightLeg: return {kJointRightHip, kJointRightKnee, kJointRightAnkle};
+  }
+  return {kJointLeftShoulder, kJointLeftElbow, kJointLeftWrist};
+}
+
 std::vector<TemplatePose> LimbHypotheses(const BodyTemplate& body, const TemplatePose& pose, Limb limb) {
   const bool arm = limb == Limb::kLeftArm || limb == Limb::kRightArm;
   const bool left = limb == Limb::kLeftArm || limb == Limb::kLeftLeg;
-  const int root = arm ? (left ? kJointLeftShoulder : kJointRightShoulder) : (left ? kJointLeftHip : kJointRightHip);
-  const int middle = root + 1;  // elbow or knee
+  const int root = LimbJoints(limb).root;
+  const int middle = LimbJoints(limb).middle;
   // The body's left is -x: a direction "towards the limb's side" has x < 0 on the left.
   const double side = left ? -1.0 : 1.0;
   const auto& rest = body.generic_rest();

@@ -17,6 +17,12 @@ constexpr Limb kAllLimbs[] = {Limb::kLeftArm, Limb::kRightArm, Limb::kLeftLeg, L
 // "left_arm", "right_arm", "left_leg", "right_leg".
 const char* LimbName(Limb limb);
 
+// A limb's chain: shoulder, elbow, wrist or hip, knee, ankle.
+struct LimbChain {
+  int root, middle, end;
+};
+LimbChain LimbJoints(Limb limb);
+
 // `pose` with `limb` moved to each canonical placement (within the joint limits), the rest of
 // the body unchanged.
 std::vector<TemplatePose> LimbHypotheses(const BodyTemplate& body, const TemplatePose& pose, Limb limb);

@@ -18,6 +18,10 @@ using Eigen::Vector3d;
 void PoseFromJointsOptions::Check() const {
   RequireOption(rotation_weight_m >= 0, "PoseFromJointsOptions.rotation_weight_m", rotation_weight_m, ">= 0");
   RequireOption(max_iterations >= 1, "PoseFromJointsOptions.max_iterations", max_iterations, ">= 1");
+  RequireOption(joint_weights.empty() || static_cast<int>(joint_weights.size()) == kNumTemplateJoints,
+                "PoseFromJointsOptions.joint_weights", static_cast<double>(joint_weights.size()),
+                "empty or one per template joint (" + std::to_string(kNumTemplateJoints) + ")");
+  for (double w : joint_weights) RequireOption(w >= 0, "PoseFromJointsOptions.joint_weights", w, ">= 0");
 }
 
 namespace {
@@ -70,6 +74,8 @@ TemplatePose FitPoseToJoints(const BodyTemplate& body, const BodyShape& shape, c
   const auto rest = body.RestPositions(shape);
   ceres::Problem problem;
   for (int j = 0; j < kNumTemplateJoints; ++j) {
+    const double weight = options.joint_weights.empty() ? 1.0 : options.joint_weights[j];
+    if (weight <= 0) continue;
     auto* functor = new JointCost;
     functor->body = &body;
     functor->joint = j;
@@ -93,7 +99,8 @@ TemplatePose FitPoseToJoints(const BodyTemplate& body, const BodyShape& shape, c
       blocks.push_back(pose.dofs[k].data());
     }
     cost->SetNumResiduals(functor->has_rotation ? 12 : 3);
-    problem.AddResidualBlock(cost, nullptr, blocks);
+    problem.AddResidualBlock(cost, weight == 1.0 ? nullptr : new ceres::ScaledLoss(nullptr, weight, ceres::TAKE_OWNERSHIP),
+                             blocks);
   }
   for (int j = 1; j < kNumTemplateJoints; ++j) {
     const int n = body.dofs()[j].num_dof();

@@ -18,6 +18,9 @@ struct PoseFromJointsOptions {
   // of this many metres (per joint, on each rotated axis).
   double rotation_weight_m = 0.1;
   int max_iterations = 60;       // Levenberg-Marquardt iterations
+  // Per joint (template order), how much its residuals count; 0 leaves the joint free. Empty:
+  // every joint counts 1.
+  std::vector<double> joint_weights;
   // Throws UsageError for out-of-range values.
   void Check() const;
 };

@@ -15,6 +15,7 @@
 #include "core/statistics.h"
 #include "core/error.h"
 #include "silhouette/overlap.h"
+#include "tracking/landmark_limbs.h"
 #include "tracking/limb_hypotheses.h"
 
 namespace confluent {
@@ -124,6 +125,9 @@ void TrackerOptions::Check() const {
   RequireOption(init_shape_proportion_weight >= 0, owner + "init_shape_proportion_weight",
                 init_shape_proportion_weight, ">= 0");
   RequireOption(limb_min_gain >= 0 && limb_min_gain < 1, owner + "limb_min_gain", limb_min_gain, "in [0, 1)");
+  RequireOption(landmark_disagreement_m > 0, owner + "landmark_disagreement_m", landmark_disagreement_m, "> 0");
+  RequireOption(landmark_iou_tolerance >= 0 && landmark_iou_tolerance < 1, owner + "landmark_iou_tolerance",
+                landmark_iou_tolerance, "in [0, 1)");
 }
 
 Tracker::Tracker(const Rig& rig, const std::vector<bool>& excluded, const TrackerOptions& options)
@@ -180,6 +184,37 @@ void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<boo
         *result = std::move(candidate);
       }
     }
+  }
+}
+
+void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std::vector<bool>& use,
+                                     const SilhouetteObservations& observations, TrackedFrame* result) {
+  if (!landmarks_) return;
+  const std::shared_ptr<const LandmarkJoints> found = landmarks_(result->frame);
+  if (!found) return;
+  const LandmarkJoints& landmarks = *found;
+  SilhouetteFitOptions fit = options_.fit;
+  fit.prior_weight = 0.2;  // towards the landmarks' placement
+  fit.coarse_to_fine = false;
+  for (Limb limb : kAllLimbs) {
+    const double before = LimbDisagreement(result->joints, landmarks, limb);
+    if (before < options_.landmark_disagreement_m) continue;  // agrees, or the landmarks do not place it
+    TrackedFrame best;
+    for (const TemplatePose& hypothesis : LimbsFromLandmarks(body_, shape_, result->pose, limb, landmarks)) {
+      TrackedFrame candidate;
+      candidate.frame = result->frame;
+      candidate.pose = hypothesis;
+      candidate.fit = FitTemplateToSilhouettes(body_, observations, fit, &shape_, &candidate.pose);
+      Evaluate(shape_, masks, use, &candidate);
+      const double after = LimbDisagreement(candidate.joints, landmarks, limb);
+      if (after < before && candidate.mean_iou >= result->mean_iou - options_.landmark_iou_tolerance &&
+          (best.joints.empty() || candidate.mean_iou > best.mean_iou))
+        best = std::move(candidate);
+    }
+    if (best.joints.empty()) continue;
+    best.flags = result->flags;
+    best.flags.push_back(std::string("landmarks:") + LimbName(limb));
+    *result = std::move(best);
   }
 }
 
@@ -291,6 +326,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
     }
   }
   if (options_.limb_search) SearchLimbs(masks, use, observations, options_.limb_fits_init, &result);
+  SettleLimbsByLandmarks(masks, use, observations, &result);
   result.flags.push_back("initialized");
   initialized_ = true;
   history_.push_back(result.pose);
@@ -375,8 +411,10 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   // A lost limb: the overlap falls below what this performance has shown lately.
   const std::vector<double> window(iou_history_.end() - std::min<std::size_t>(iou_history_.size(), kIouWindow),
                                    iou_history_.end());
-  if (options_.limb_search && result.mean_iou < Median(window) - options_.limb_search_drop)
+  if (options_.limb_search && result.mean_iou < Median(window) - options_.limb_search_drop) {
     SearchLimbs(masks, use, observations, options_.limb_fits, &result);
+    SettleLimbsByLandmarks(masks, use, observations, &result);
+  }
   history_.push_back(result.pose);
   if (history_.size() > 4) history_.erase(history_.begin());
   iou_history_.push_back(result.mean_iou);

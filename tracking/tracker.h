@@ -4,12 +4,15 @@
 // velocity prediction, bad-frame detection and recovery (after Carranza et al. 2003).
 
 #include <Eigen/Core>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "calib/camera.h"
 #include "core/image.h"
 #include "tracking/body_template.h"
+#include "tracking/landmark_joints.h"
 #include "tracking/silhouette_fit.h"
 
 namespace confluent {
@@ -57,6 +60,12 @@ struct TrackerOptions {
   int limb_fits = 2;
   int limb_fits_init = 4;          // at initialisation (once per run), more of them are fitted
   double limb_min_gain = 0.005;
+  // Landmarks (Initialize's `landmarks`): a limb whose wrist or ankle lies this far from them is
+  // turned towards them (tracking/landmark_limbs.h) and fitted again, and kept when its end
+  // comes closer and the mean IoU falls by no more than `landmark_iou_tolerance` (silhouettes
+  // hardly tell a forearm folded forward from one folded back; the landmarks do).
+  double landmark_disagreement_m = 0.08;
+  double landmark_iou_tolerance = 0.015;
   // Throws UsageError for out-of-range values.
   void Check() const;
 };
@@ -89,6 +98,12 @@ class Tracker {
   // needs the IoUs of this many frames before for a resumed run to track as an uninterrupted one.
   static constexpr int kIouWindow = 25;
 
+  // Joints triangulated from a detector's landmarks in a frame (null: none for that frame).
+  using LandmarkSource = std::function<std::shared_ptr<const LandmarkJoints>(int frame)>;
+  // Asked at the first frame and in the frames where the lost-limb search runs: the landmarks
+  // settle limbs that the silhouettes leave ambiguous (flag "landmarks:<limb>").
+  void UseLandmarks(LandmarkSource source) { landmarks_ = std::move(source); }
+
   // Continues from saved state instead of Initialize (a resumed run, or a shard boundary): the
   // fitted shape, the accepted poses of the frames just before (the last 4 are used) and their
   // mean IoUs (the last kIouWindow), oldest first.
@@ -107,6 +122,10 @@ class Tracker {
   // better, flagging "limb:<name>" for each limb moved.
   void SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
                    const SilhouetteObservations& observations, int fits, TrackedFrame* result);
+  // Turns each limb of `result` that disagrees with the landmarks of its frame towards them
+  // (see TrackerOptions); nothing without a landmark source.
+  void SettleLimbsByLandmarks(const std::vector<Image>& masks, const std::vector<bool>& use,
+                              const SilhouetteObservations& observations, TrackedFrame* result);
 
   Rig rig_;
   std::vector<bool> excluded_;
@@ -118,6 +137,7 @@ class Tracker {
   std::vector<TemplatePose> history_;     // accepted poses, most recent last
   std::vector<double> iou_history_;
   std::vector<std::size_t> last_mask_hashes_;
+  LandmarkSource landmarks_;
 };
 
 }  // namespace confluent

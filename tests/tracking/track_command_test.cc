@@ -46,6 +46,17 @@ TEST(TrackCommand, TracksTheTinyStudioCapture) {
   const Mesh mesh = ReadMesh(run + "/template/000009.ply");
   EXPECT_TRUE(mesh.has_face_labels());
   EXPECT_TRUE(fs::exists(run + "/overlays/holdout0/000000.png"));
+  // BlazePose looked at the first frame (the tracker's landmark evidence) ...
+  EXPECT_NE(track.stdout_text.find("frame 0: landmarks "), std::string::npos) << track.stdout_text;
+  // ... and without the segmenter the tracking goes on from the silhouettes, saying why.
+  const testing::CommandResult alone = testing::RunConfluent(
+      {"track", capture, "--masks", gt + "/masks", "--exclude-camera", "holdout0", "--exclude-camera", "holdout1",
+       "--frames", "0:2", "--out", dir / "run_alone"},
+      "CONFLUENT_PERSON_SEGMENTER=" + dir / "missing/segment.js");
+  ASSERT_EQ(alone.exit_code, 0) << alone.stderr_text << alone.stdout_text;
+  EXPECT_NE(alone.stdout_text.find("no landmarks (tracking from the silhouettes alone)"), std::string::npos)
+      << alone.stdout_text;
+  EXPECT_NE(alone.stdout_text.find("missing/segment.js"), std::string::npos) << alone.stdout_text;
 
   // Unknown camera names are usage errors.
   const testing::CommandResult bad = testing::RunConfluent({"track", capture, "--masks", gt + "/masks", "--exclude-camera", "nope", "--out", dir / "run2"});

@@ -1,0 +1,116 @@
+// Limbs settled by triangulated landmarks (tracking/landmark_limbs.h, Tracker::UseLandmarks).
+// Ground truth: masks rendered from the template itself, made ambiguous on purpose (the union
+// of the body with its left forearm folded two ways), and landmark joints taken from one of the
+// two poses: the tracker must follow whichever the landmarks say.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "silhouette/overlap.h"
+#include "tests/support/camera_ring.h"
+#include "tracking/landmark_limbs.h"
+#include "tracking/tracker.h"
+
+namespace confluent {
+namespace {
+
+// The left upper arm raised forwards, the elbow bent 80 degrees; the upper arm's twist about
+// its own axis turns the fold (the elbow stays where it is): `inwards` across the chest, else
+// 80 degrees further round.
+TemplatePose ForearmFolded(const BodyTemplate& body, bool inwards) {
+  TemplatePose pose;
+  pose.root_rotation = Eigen::Vector3d(0, 0, 0.3);
+  const Eigen::AngleAxisd raised(1.2, -Eigen::Vector3d::UnitX());
+  const Eigen::Vector3d upper_arm =
+      raised * (body.generic_rest()[kJointLeftElbow] - body.generic_rest()[kJointLeftShoulder]).normalized();
+  const Eigen::AngleAxisd shoulder(Eigen::AngleAxisd(inwards ? 0.0 : 1.4, upper_arm) * raised);
+  const Eigen::Vector3d r = shoulder.angle() * shoulder.axis();
+  pose.dofs[kJointLeftShoulder] = {r.x(), r.y(), r.z()};
+  pose.dofs[kJointLeftElbow] = {1.4, 0, 0};
+  return pose;
+}
+
+// Joints the landmarks would give: the template's own, for the 14 limb joints.
+LandmarkJoints LandmarksOf(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose) {
+  LandmarkJoints landmarks;
+  landmarks.position = body.JointPositions(shape, pose);
+  landmarks.cameras.assign(kNumTemplateJoints, 0);
+  landmarks.rms_px.assign(kNumTemplateJoints, 1.0);
+  for (int j : {kJointLeftShoulder, kJointLeftElbow, kJointLeftWrist, kJointRightShoulder, kJointRightElbow,
+                kJointRightWrist, kJointLeftHip, kJointLeftKnee, kJointLeftAnkle, kJointLeftToe, kJointRightHip,
+                kJointRightKnee, kJointRightAnkle, kJointRightToe})
+    landmarks.cameras[j] = 8;
+  return landmarks;
+}
+
+std::vector<Image> UnionMasks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& a,
+                              const TemplatePose& b, const Rig& rig) {
+  const Mesh mesh_a = body.PosedMesh(shape, a), mesh_b = body.PosedMesh(shape, b);
+  std::vector<Image> masks;
+  for (const Camera& camera : rig.cameras) {
+    Image mask = RasterizeClosedMesh(mesh_a, camera);
+    const Image other = RasterizeClosedMesh(mesh_b, camera);
+    for (std::size_t i = 0; i < mask.data.size(); ++i) mask.data[i] = std::max(mask.data[i], other.data[i]);
+    masks.push_back(mask);
+  }
+  return masks;
+}
+
+TEST(LandmarkLimbs, TheLowerBoneTurnsOntoTheLandmarksWristTheRestStays) {
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(1.75);
+  const TemplatePose from = ForearmFolded(body, true), to = ForearmFolded(body, false);
+  const std::vector<Eigen::Vector3d> target = body.JointPositions(shape, to);
+  const std::vector<Eigen::Vector3d> start = body.JointPositions(shape, from);
+  EXPECT_LT((target[kJointLeftElbow] - start[kJointLeftElbow]).norm(), 0.01);
+  EXPECT_GT((target[kJointLeftWrist] - start[kJointLeftWrist]).norm(), 0.2);
+  const std::vector<TemplatePose> hypotheses =
+      LimbsFromLandmarks(body, shape, from, Limb::kLeftArm, LandmarksOf(body, shape, to));
+  ASSERT_EQ(hypotheses.size(), 2u);  // the forearm alone, both bones
+  for (const TemplatePose& hypothesis : hypotheses) {
+    const std::vector<Eigen::Vector3d> joints = body.JointPositions(shape, hypothesis);
+    EXPECT_LT((joints[kJointLeftWrist] - target[kJointLeftWrist]).norm(), 0.03);
+    for (int j : {kJointRightWrist, kJointLeftAnkle, kJointRightAnkle, kJointHead})
+      EXPECT_LT((joints[j] - start[j]).norm(), 0.01) << BodyJointNames()[j];
+  }
+  EXPECT_LT(LimbDisagreement(body.JointPositions(shape, hypotheses[0]), LandmarksOf(body, shape, to), Limb::kLeftArm),
+            0.03);
+  LandmarkJoints unknown = LandmarksOf(body, shape, to);
+  unknown.cameras[kJointLeftWrist] = 0;
+  EXPECT_TRUE(LimbsFromLandmarks(body, shape, from, Limb::kLeftArm, unknown).empty());
+  EXPECT_LT(LimbDisagreement(start, unknown, Limb::kLeftArm), 0.0);
+}
+
+// The tracker holds the forearm one way when a frame's overlap drops (the masks hold both
+// folds); the landmarks say which: the tracker follows them, either way round.
+TEST(LandmarkLimbs, TheTrackerFollowsTheLandmarksWhereTheSilhouettesHoldBothFolds) {
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(1.75);
+  const Rig rig = testing::CameraRing(8, 200, 150);
+  const TemplatePose inwards = ForearmFolded(body, true), up = ForearmFolded(body, false);
+  const std::vector<Image> masks = UnionMasks(body, shape, inwards, up, rig);
+  auto left_wrist_error = [&](const TemplatePose& held, const TemplatePose& said, std::string* flags) {
+    TrackerOptions options;
+    Tracker tracker(rig, {}, options);
+    const LandmarkJoints landmarks = LandmarksOf(body, shape, said);
+    tracker.UseLandmarks([&](int) { return std::make_shared<const LandmarkJoints>(landmarks); });
+    tracker.Resume(shape, {held, held}, std::vector<double>(10, 0.99));  // the frames before were explained
+    const TrackedFrame result = tracker.Track(10, masks);
+    for (const std::string& flag : result.flags) *flags += flag + " ";
+    return (result.joints[kJointLeftWrist] - body.JointPositions(shape, said)[kJointLeftWrist]).norm();
+  };
+  std::string flags_up, flags_inwards;
+  EXPECT_LT(left_wrist_error(inwards, up, &flags_up), 0.05) << flags_up;
+  EXPECT_NE(flags_up.find("landmarks:left_arm"), std::string::npos) << flags_up;
+  EXPECT_LT(left_wrist_error(up, inwards, &flags_inwards), 0.05) << flags_inwards;
+  EXPECT_NE(flags_inwards.find("landmarks:left_arm"), std::string::npos) << flags_inwards;
+  // Without a landmark source the tracker keeps the fold it held: the silhouettes do not decide.
+  Tracker plain(rig, {}, TrackerOptions{});
+  plain.Resume(shape, {inwards, inwards}, std::vector<double>(10, 0.99));
+  const TrackedFrame kept = plain.Track(10, masks);
+  EXPECT_GT((kept.joints[kJointLeftWrist] - body.JointPositions(shape, up)[kJointLeftWrist]).norm(), 0.15);
+}
+
+}  // namespace
+}  // namespace confluent

@@ -1,0 +1,41 @@
+#include "tracking/landmark_limbs.h"
+
+#include <algorithm>
+
+#include "tracking/pose_from_joints.h"
+
+namespace confluent {
+
+using Eigen::Vector3d;
+
+double LimbDisagreement(const std::vector<Vector3d>& joints, const LandmarkJoints& landmarks, Limb limb) {
+  const int end = LimbJoints(limb).end;
+  return landmarks.known(end) ? (joints[end] - landmarks.position[end]).norm() : -1.0;
+}
+
+std::vector<TemplatePose> LimbsFromLandmarks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose,
+                                             Limb limb, const LandmarkJoints& landmarks) {
+  const LimbChain chain = LimbJoints(limb);
+  if (!landmarks.known(chain.end)) return {};
+  const std::vector<Vector3d> joints = body.JointPositions(shape, pose);
+  const double upper = (joints[chain.middle] - joints[chain.root]).norm();
+  const double lower = (joints[chain.end] - joints[chain.middle]).norm();
+  // Every other joint holds its place, except the hand's or foot's end, which follows the limb.
+  PoseFromJointsOptions options;
+  options.joint_weights.assign(kNumTemplateJoints, 1.0);
+  options.joint_weights[chain.end + 1] = 0.0;  // the hand end or the toe
+  auto turned = [&](const Vector3d& middle) {
+    std::vector<Vector3d> targets = joints;
+    targets[chain.middle] = middle;
+    targets[chain.end] = middle + lower * (landmarks.position[chain.end] - middle).normalized();
+    return FitPoseToJoints(body, shape, targets, nullptr, pose, options);
+  };
+  std::vector<TemplatePose> out = {turned(joints[chain.middle])};
+  if (landmarks.known(chain.middle)) {
+    const Vector3d from = landmarks.known(chain.root) ? landmarks.position[chain.root] : joints[chain.root];
+    out.push_back(turned(joints[chain.root] + upper * (landmarks.position[chain.middle] - from).normalized()));
+  }
+  return out;
+}
+
+}  // namespace confluent

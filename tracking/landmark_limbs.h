@@ -1,0 +1,25 @@
+#pragma once
+// Limbs placed where triangulated landmarks say they are (tracking/landmark_joints.h): how far a
+// pose's limb lies from them, and the pose with that limb turned onto them.
+
+#include <vector>
+
+#include "tracking/body_template.h"
+#include "tracking/landmark_joints.h"
+#include "tracking/limb_hypotheses.h"
+
+namespace confluent {
+
+// The distance (m) between the end joint of `limb` (wrist or ankle) in `joints` (template order,
+// world) and the landmarks'; -1 when the landmarks do not place it.
+double LimbDisagreement(const std::vector<Eigen::Vector3d>& joints, const LandmarkJoints& landmarks, Limb limb);
+
+// `pose` with `limb` turned towards the landmarks, the template's bone lengths kept and the rest
+// of the body unchanged, in two ways: the lower bone alone pointed at the landmarks' wrist or
+// ankle (the elbow or knee held: a forearm folded the wrong way), and both bones pointed as the
+// landmarks' are (when they place the elbow or knee). None when the landmarks do not place the
+// end joint.
+std::vector<TemplatePose> LimbsFromLandmarks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose,
+                                             Limb limb, const LandmarkJoints& landmarks);
+
+}  // namespace confluent
