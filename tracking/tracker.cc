@@ -126,6 +126,7 @@ void TrackerOptions::Check() const {
                 init_shape_proportion_weight, ">= 0");
   RequireOption(limb_min_gain >= 0 && limb_min_gain < 1, owner + "limb_min_gain", limb_min_gain, "in [0, 1)");
   RequireOption(landmark_disagreement_m > 0, owner + "landmark_disagreement_m", landmark_disagreement_m, "> 0");
+  RequireOption(landmark_min_approach_m >= 0, owner + "landmark_min_approach_m", landmark_min_approach_m, ">= 0");
   RequireOption(landmark_iou_tolerance >= 0 && landmark_iou_tolerance < 1, owner + "landmark_iou_tolerance",
                 landmark_iou_tolerance, "in [0, 1)");
 }
@@ -207,7 +208,7 @@ void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std:
       candidate.fit = FitTemplateToSilhouettes(body_, observations, fit, &shape_, &candidate.pose);
       Evaluate(shape_, masks, use, &candidate);
       const double after = LimbDisagreement(candidate.joints, landmarks, limb);
-      if (after < before && candidate.mean_iou >= result->mean_iou - options_.landmark_iou_tolerance &&
+      if (after <= before - options_.landmark_min_approach_m && candidate.mean_iou >= result->mean_iou - options_.landmark_iou_tolerance &&
           (best.joints.empty() || candidate.mean_iou > best.mean_iou))
         best = std::move(candidate);
     }
