@@ -158,11 +158,21 @@ std::vector<bool> Tracker::UsableCameras(const std::vector<Image>& masks, std::v
   return use;
 }
 
-void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
-                          const SilhouetteObservations& observations, int fits, TrackedFrame* result) {
+TrackedFrame Tracker::FitLimbHypothesis(const TemplatePose& hypothesis, int frame, const std::vector<Image>& masks,
+                                        const std::vector<bool>& use, const SilhouetteObservations& observations) {
   SilhouetteFitOptions fit = options_.fit;
   fit.prior_weight = 0.2;  // towards the hypothesis itself
   fit.coarse_to_fine = false;
+  TrackedFrame candidate;
+  candidate.frame = frame;
+  candidate.pose = hypothesis;
+  candidate.fit = FitTemplateToSilhouettes(body_, observations, fit, &shape_, &candidate.pose);
+  Evaluate(shape_, masks, use, &candidate);
+  return candidate;
+}
+
+void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
+                          const SilhouetteObservations& observations, int fits, TrackedFrame* result) {
   for (Limb limb : kAllLimbs) {
     std::vector<TrackedFrame> scored;
     for (const TemplatePose& hypothesis : LimbHypotheses(body_, result->pose, limb)) {
@@ -175,10 +185,7 @@ void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<boo
     std::partial_sort(scored.begin(), scored.begin() + keep, scored.end(),
                       [](const TrackedFrame& a, const TrackedFrame& b) { return a.mean_iou > b.mean_iou; });
     for (int k = 0; k < keep; ++k) {
-      TrackedFrame candidate = scored[k];
-      candidate.frame = result->frame;
-      candidate.fit = FitTemplateToSilhouettes(body_, observations, fit, &shape_, &candidate.pose);
-      Evaluate(shape_, masks, use, &candidate);
+      TrackedFrame candidate = FitLimbHypothesis(scored[k].pose, result->frame, masks, use, observations);
       if (candidate.mean_iou > result->mean_iou + options_.limb_min_gain) {
         candidate.flags = result->flags;
         candidate.flags.push_back(std::string("limb:") + LimbName(limb));
@@ -194,19 +201,12 @@ void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std:
   const std::shared_ptr<const LandmarkJoints> found = landmarks_(result->frame);
   if (!found) return;
   const LandmarkJoints& landmarks = *found;
-  SilhouetteFitOptions fit = options_.fit;
-  fit.prior_weight = 0.2;  // towards the landmarks' placement
-  fit.coarse_to_fine = false;
   for (Limb limb : kAllLimbs) {
     const double before = LimbDisagreement(result->joints, landmarks, limb);
     if (before < options_.landmark_disagreement_m) continue;  // agrees, or the landmarks do not place it
     TrackedFrame best;
     for (const TemplatePose& hypothesis : LimbsFromLandmarks(body_, shape_, result->pose, limb, landmarks)) {
-      TrackedFrame candidate;
-      candidate.frame = result->frame;
-      candidate.pose = hypothesis;
-      candidate.fit = FitTemplateToSilhouettes(body_, observations, fit, &shape_, &candidate.pose);
-      Evaluate(shape_, masks, use, &candidate);
+      TrackedFrame candidate = FitLimbHypothesis(hypothesis, result->frame, masks, use, observations);
       const double after = LimbDisagreement(candidate.joints, landmarks, limb);
       if (after <= before - options_.landmark_min_approach_m && candidate.mean_iou >= result->mean_iou - options_.landmark_iou_tolerance &&
           (best.joints.empty() || candidate.mean_iou > best.mean_iou))

@@ -122,6 +122,9 @@ class Tracker {
   std::vector<bool> UsableCameras(const std::vector<Image>& masks, std::vector<std::string>* flags) const;
   void Evaluate(const BodyShape& shape, const std::vector<Image>& masks, const std::vector<bool>& use,
                 TrackedFrame* result) const;
+  // `hypothesis` fitted to `observations` (pulled towards itself, all segments at once) and scored.
+  TrackedFrame FitLimbHypothesis(const TemplatePose& hypothesis, int frame, const std::vector<Image>& masks,
+                                 const std::vector<bool>& use, const SilhouetteObservations& observations);
   // Re-places each limb of `result` (fitted to `observations`) where it overlaps the masks
   // better, flagging "limb:<name>" for each limb moved.
   void SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
