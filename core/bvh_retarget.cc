@@ -67,16 +67,18 @@ std::vector<std::string> EssentialJoints() {
   return names;
 }
 
-// The rotation R that best maps the unit vectors `from` onto `to` (Kabsch); the minimal
-// rotation for a single pair or collinear vectors. Empty input: identity.
-Matrix3d BestRotation(const std::vector<Vector3d>& from, const std::vector<Vector3d>& to) {
+// The rotation R that best maps the unit vectors `from` onto `to` (Kabsch). A single pair or
+// collinear vectors leave the twist about them open: then the rotation nearest `prior` (the
+// minimal swing after `prior`). Empty input: identity.
+Matrix3d BestRotation(const std::vector<Vector3d>& from, const std::vector<Vector3d>& to,
+                      const Matrix3d& prior = Matrix3d::Identity()) {
   if (from.empty()) return Matrix3d::Identity();
-  if (from.size() == 1) return Quaterniond::FromTwoVectors(from[0], to[0]).toRotationMatrix();
+  auto swing_after_prior = [&]() -> Matrix3d { return Quaterniond::FromTwoVectors(prior * from[0], to[0]).toRotationMatrix() * prior; };
+  if (from.size() == 1) return swing_after_prior();
   Matrix3d h = Matrix3d::Zero();
   for (std::size_t i = 0; i < from.size(); ++i) h += from[i] * to[i].transpose();
   const Eigen::JacobiSVD<Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  if (svd.singularValues()(1) < 1e-6 * svd.singularValues()(0))
-    return Quaterniond::FromTwoVectors(from[0], to[0]).toRotationMatrix();
+  if (svd.singularValues()(1) < 1e-6 * svd.singularValues()(0)) return swing_after_prior();
   Matrix3d d = Matrix3d::Identity();
   d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
   return svd.matrixV() * d * svd.matrixU().transpose();
@@ -356,8 +358,12 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
     }
     // A mapped joint without a mapped child (a head over a neck that leans, as CMU's ASF necks
     // do; a spine below an unmapped chest) takes the pelvis's orientation in the reference pose
-    // (the body's heading), rather than its parent's tilt.
-    reference_world[j] = from.empty() ? reference_world[0] : BestRotation(from, to);
+    // (the body's heading), rather than its parent's tilt. A joint with one child keeps its
+    // parent's twist: turned only as far as its bone needs (CMU's subject 94 stands at rest
+    // facing away from its first frame; without the parent's twist every single-child joint
+    // came out turned half round about its bone against its parent: a spine twisted by 180
+    // degrees, the head facing backwards).
+    reference_world[j] = from.empty() ? reference_world[0] : BestRotation(from, to, reference_world[j]);
     align[j] = reference_rotation.transpose() * reference_world[j];
   }
 

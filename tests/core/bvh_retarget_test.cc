@@ -256,6 +256,37 @@ TEST(BvhRetarget, RestPoseThatIsNoStandingBodyGivesTheSameBody) {
   }
 }
 
+// A performer who faces away from the BVH's rest pose in every frame (CMU's subject 94: the rest
+// pose faces +z, the dance -z). Turned to face the target at frame 0, the body is the same as
+// that of the same motion performed facing the rest pose's way: no bone turned half round about
+// itself against its parent (before, the spine and the neck were, and the head faced backwards).
+TEST(BvhRetarget, PerformerFacingAwayFromTheRestPoseGivesTheSameBody) {
+  testing::TempDir dir;
+  std::ofstream(dir / "m.bvh") << SyntheticBvh(TestFrames());
+  const BvhMotion motion = ReadBvh(dir / "m.bvh");
+  BvhMotion away = motion;
+  const Eigen::Quaterniond half_turn(Eigen::AngleAxisd(M_PI, Vector3d::UnitY()));  // about the BVH's up
+  for (Pose& frame : away.frames) {
+    frame.root_translation = half_turn * frame.root_translation;
+    frame.local_rotations[0] = half_turn * frame.local_rotations[0];
+  }
+  const Skeleton target = StudioLikeSkeleton();
+  const BvhRetargetResult expected = RetargetBvh(motion, target);
+  const BvhRetargetResult result = RetargetBvh(away, target);
+  ASSERT_EQ(result.poses.size(), expected.poses.size());
+  for (std::size_t f = 0; f < result.poses.size(); ++f) {
+    const auto want = WorldFromJoint(target, expected.poses[f]), got = WorldFromJoint(target, result.poses[f]);
+    for (int j = 0; j < target.size(); ++j) {
+      EXPECT_LT((want[j].translation() - got[j].translation()).norm(), 1e-9) << "frame " << f << " " << target.joints[j].name;
+      EXPECT_LT((want[j].linear() - got[j].linear()).norm(), 1e-9) << "frame " << f << " " << target.joints[j].name;
+    }
+  }
+  // And at frame 0 (a T-pose) no joint is turned against its parent by more than the bones'
+  // rest directions ask (the arms: 50 degrees up from the target's A-pose).
+  for (int j = 1; j < target.size(); ++j)
+    EXPECT_LT(Eigen::AngleAxisd(result.poses[0].local_rotations[j]).angle(), 55 * M_PI / 180) << target.joints[j].name;
+}
+
 // CMU's ASF exports have no head joint: LowerNeck -> Neck, where the upper neck turns the head.
 TEST(BvhRetarget, UpperOfTwoNeckJointsTurnsTheHead) {
   testing::TempDir dir;
