@@ -1,8 +1,9 @@
 // The motion suite's BVH clips (../shared/data/bvh/suite/, skipped when absent), performed by the
 // studio actor as `synth --bvh` performs them: each source skeleton (CMU, SFU, Bandai Namco,
 // Perfume, three.js, a Z-up file without a head joint) gives an actor of the right height,
-// upright at the first frame with the shoulders square to the hips, whose every segment moves
-// and whose pelvis stays in the capture volume.
+// upright at the first frame with the shoulders square to the hips, whose every segment moves,
+// whose trunk and neck never twist half round about their bones, and whose pelvis stays in the
+// capture volume.
 
 #include <gtest/gtest.h>
 
@@ -67,7 +68,7 @@ TEST_P(BvhSuiteClip, ActorIsUprightOfItsHeightMovesEverySegmentAndStaysInView) {
   const std::array<int, kNumBodySegments> segment_joint = StudioSegmentJoints();
   std::array<double, kNumBodySegments> turned{};
   const auto first_world = WorldFromJoint(skeleton, poses[0]);
-  double farthest = 0.0;
+  double farthest = 0.0, largest_bone_twist = 0.0;
   for (const Pose& pose : poses) {
     const auto world = WorldFromJoint(skeleton, pose);
     for (int s = 0; s < kNumBodySegments; ++s) {
@@ -75,12 +76,22 @@ TEST_P(BvhSuiteClip, ActorIsUprightOfItsHeightMovesEverySegmentAndStaysInView) {
       turned[s] = std::max(turned[s], Eigen::AngleAxisd(delta).angle() * 180.0 / M_PI);
     }
     farthest = std::max(farthest, world[kJointPelvis].translation().head<2>().norm());
+    // Twist of each trunk and neck joint about its own bone against its parent (a spine turned
+    // half round on the pelvis, a head facing backwards: joint positions cannot show it).
+    for (int j : {kJointSpine, kJointChest, kJointNeck, kJointHead}) {
+      const Vector3d axis = skeleton.joints[j + 1].offset_in_parent.normalized();  // spine->chest ... head->head_end
+      const Eigen::Quaterniond& q = pose.local_rotations[j];
+      double angle = 2.0 * std::atan2(q.vec().dot(axis), q.w()) * 180.0 / M_PI;
+      angle = std::abs(std::remainder(angle, 360.0));
+      largest_bone_twist = std::max(largest_bone_twist, angle);
+    }
   }
   double least_turn = 1e9;
   for (double t : turned) least_turn = std::min(least_turn, t);
   std::printf("%-34s unit %-4s up %c height %.3f lean %.1f deg twist %.1f deg least segment turn %.1f deg travel "
-              "%.2f m, placed within %.2f of %.2f m\n", GetParam().file, retarget.unit.c_str(), retarget.up_axis,
-              height, lean_deg, twist_deg, least_turn, placement.travel_m, farthest, volume);
+              "%.2f m, placed within %.2f of %.2f m, trunk/neck bone twist up to %.0f deg\n", GetParam().file,
+              retarget.unit.c_str(), retarget.up_axis, height, lean_deg, twist_deg, least_turn, placement.travel_m, farthest,
+              volume, largest_bone_twist);
   for (const auto& w : retarget.warnings) std::printf("  warning: %s\n", w.c_str());
   for (const auto& u : retarget.unmapped) std::printf("  unmapped: %s\n", u.c_str());
 
@@ -89,6 +100,7 @@ TEST_P(BvhSuiteClip, ActorIsUprightOfItsHeightMovesEverySegmentAndStaysInView) {
   EXPECT_LT(twist_deg, 60.0);
   EXPECT_GT(least_turn, 3.0);
   EXPECT_LE(farthest, volume + 1e-9);
+  EXPECT_LT(largest_bone_twist, 90.0);  // a neck turns about 80 degrees at most
 }
 
 INSTANTIATE_TEST_SUITE_P(
