@@ -87,7 +87,7 @@ std::string RunCapture(const RunOptions& options, const std::function<ProgressCa
   done(RunTrackingStage(inputs, body, progress(), &timings, &shape));
   if (inputs.scan != nullptr) {
     done(RunCorrespondenceStage(inputs, body, shape, &timings));
-    done(RunDeformStage(inputs, progress(), &timings, options.render ? &options.render_options : nullptr));
+    done(RunDeformStage(inputs, body, progress(), &timings, options.render ? &options.render_options : nullptr));
   }
   if (options.render) done(RunRenderStage(inputs, options.render_options, progress(), &timings));
   return timings_path;

@@ -77,11 +77,13 @@ struct RenderStageOptions {
   int height = 720;
 };
 
-// Confluent Motion of the scan driven by RUN/template/<frame>.ply: RUN/scan/<frame>.ply. With
+// Confluent Motion of the scan driven by RUN/template/<frame>.ply: RUN/scan/<frame>.ply (where the
+// registration records a first tracked pose, the first frames' templates are eased from the
+// registered pose into the tracked ones, pipeline/first_pose_seam.h). With
 // `render` (the render stage follows), each refined scan's 3D-video frame is drawn too while
 // the frame's images are decoded for the photo refinement, as the render stage would draw it.
-StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings,
-                           const RenderStageOptions* render = nullptr);
+StageReport RunDeformStage(const RunInputs& inputs, const BodyTemplate& body, const ProgressCallback& progress,
+                           TimingLog* timings, const RenderStageOptions* render = nullptr);
 
 // The 3D video: an orbit around the actor, the scan (or the template without a scan)
 // projectively textured from the used cameras, RUN/renders/orbit/<frame>.png and orbit.mp4.

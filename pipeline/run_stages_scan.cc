@@ -4,11 +4,13 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
-#include <memory>
 #include <filesystem>
+#include <memory>
+#include <optional>
 
 #include "pipeline/run_stages.h"
 #include "pipeline/orbit_frames.h"
+#include "pipeline/first_pose_seam.h"
 #include "pipeline/frame_refinement.h"
 #include "pipeline/scan_correspondence.h"
 #include "core/error.h"
@@ -18,6 +20,7 @@
 #include "deform/confluent_motion.h"
 #include "deform/correspondences.h"
 #include "tracking/motion_io.h"
+#include "tracking/scan_registration.h"
 
 namespace confluent {
 namespace fs = std::filesystem;
@@ -60,8 +63,33 @@ StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& 
   return report;
 }
 
-StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings,
-                           const RenderStageOptions* render) {
+namespace {
+
+// The seam of a scan in the first tracked frame's pose whose reference is not that frame's
+// template (its registration records the first tracked pose), with the tracked poses and shape.
+struct RunSeam {
+  FirstPoseSeam seam;
+  PosesFile tracked;
+};
+
+std::optional<RunSeam> ReadRunSeam(const RunInputs& inputs, const BodyTemplate& body,
+                                   const std::string& correspondences_path) {
+  ScanRegistration registration;
+  try {
+    registration = ReadTemplateRegistration(correspondences_path, body);
+  } catch (const InputError&) {
+    return std::nullopt;  // given correspondences without a registration
+  }
+  if (!registration.first_tracked_pose) return std::nullopt;
+  RunSeam run{{registration.pose, *registration.first_tracked_pose, FirstPoseSeamFrames(inputs.fps)},
+              ReadPosesJson(inputs.folder.Path("poses.json"), body)};
+  return run;
+}
+
+}  // namespace
+
+StageReport RunDeformStage(const RunInputs& inputs, const BodyTemplate& body, const ProgressCallback& progress,
+                           TimingLog* timings, const RenderStageOptions* render) {
   StageReport report("deform");
   const double start = NowSeconds();
   const RunFolder& folder = inputs.folder;
@@ -77,6 +105,7 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
   const std::string correspondences_path = folder.Path("correspondences.json");
   const Mesh reference = ReadMesh(reference_path);
   const Correspondences correspondences = ReadCorrespondences(correspondences_path);
+  const std::optional<RunSeam> seam = ReadRunSeam(inputs, body, correspondences_path);
   const double factor_start = NowSeconds();
   ConfluentMotion motion(scan, reference, correspondences, {}, inputs.scan_path, correspondences_path);
   timings->Add("deform_factor", -1, NowSeconds() - factor_start);
@@ -117,6 +146,13 @@ StageReport RunDeformStage(const RunInputs& inputs, const ProgressCallback& prog
     if (posed.vertices.rows() != reference.vertices.rows())
       throw InputError(path, "the template has " + std::to_string(posed.vertices.rows()) + " vertices, the reference " +
                                  std::to_string(reference.vertices.rows()));
+    if (seam && frame < seam->seam.frames) {
+      const auto tracked = std::find_if(seam->tracked.frames.begin(), seam->tracked.frames.end(),
+                                        [&](const TrackedFrame& f) { return f.frame == frame; });
+      if (tracked == seam->tracked.frames.end())
+        throw InputError(folder.Path("poses.json"), "frame " + std::to_string(frame) + " is not tracked");
+      ApplyFirstPoseSeam(body, seam->tracked.shape, seam->seam, tracked->pose, frame, &posed.vertices);
+    }
     return posed.vertices;
   };
   // The used cameras' masks and images at `frame`.

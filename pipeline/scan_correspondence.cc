@@ -19,13 +19,18 @@ namespace {
 constexpr double kAsTrackedTolerance = 1.25;
 constexpr double kAsTrackedSegmentExcessM = 0.01;
 
-// The largest excess of `a`'s per-segment rms over `b`'s, in metres.
-double WorstSegmentExcessM(const ScanRegistration& a, const ScanRegistration& b) {
-  double worst = 0.0;
+// The segment of `a` whose rms exceeds `b`'s the most, and by how much (metres).
+struct SegmentExcess {
+  int segment = -1;
+  double metres = 0.0;
+};
+SegmentExcess WorstSegmentExcess(const ScanRegistration& a, const ScanRegistration& b) {
+  SegmentExcess worst;
   for (std::size_t s = 0; s < a.segment_rms_m.size() && s < b.segment_rms_m.size(); ++s)
-    if (std::isfinite(a.segment_rms_m[s]) && std::isfinite(b.segment_rms_m[s]))
-      worst = std::max(worst, a.segment_rms_m[s] - b.segment_rms_m[s]);
-  return worst * a.metres_per_unit;
+    if (std::isfinite(a.segment_rms_m[s]) && std::isfinite(b.segment_rms_m[s]) &&
+        (a.segment_rms_m[s] - b.segment_rms_m[s]) * a.metres_per_unit > worst.metres)
+      worst = {static_cast<int>(s), (a.segment_rms_m[s] - b.segment_rms_m[s]) * a.metres_per_unit};
+  return worst;
 }
 
 std::string Centimetres(double metres) {
@@ -68,14 +73,24 @@ ScanRegistration RegisterSeeded(const BodyTemplate& body, const Mesh& scan, cons
   // The scan stands in the first frame's pose, and the tracked template fits it about as well as
   // a fit to the scan does: frame 0's template itself is the reference, so that frame 0 of the
   // animated scan is the scan and later frames move by what the tracker saw move.
-  const ScanRegistration* fitted = first_fits_better ? &*from_first_frame : from_seed ? &*from_seed : nullptr;
+  ScanRegistration* const fitted = first_fits_better ? &*from_first_frame : from_seed ? &*from_seed : nullptr;
   const double fitted_rms = fitted ? fitted->rms_residual_m : 0.0;
-  if (as_tracked && as_tracked->rms_residual_m <= kAsTrackedTolerance * fitted_rms &&
-      WorstSegmentExcessM(*as_tracked, *fitted) <= kAsTrackedSegmentExcessM) {
+  const bool in_first_pose = as_tracked && as_tracked->rms_residual_m <= kAsTrackedTolerance * fitted_rms;
+  const SegmentExcess excess = in_first_pose ? WorstSegmentExcess(*as_tracked, *fitted) : SegmentExcess();
+  if (in_first_pose && excess.metres <= kAsTrackedSegmentExcessM) {
     as_tracked->warnings.push_back("the scan stands in the first tracked frame's pose: that frame's template is the "
                                    "reference (rms " + Centimetres(as_tracked->rms_residual_m) + ", fitted " +
                                    Centimetres(fitted_rms) + ")");
     return *as_tracked;
+  }
+  if (in_first_pose) {
+    // The tracker erred on one segment at frame 0: the fit is the reference, and the first frames
+    // ease from it into the tracked poses (pipeline/first_pose_seam.h).
+    fitted->first_tracked_pose = options.first_tracked_pose;
+    fitted->warnings.push_back("the scan stands in the first tracked frame's pose, but that frame's " +
+                               BodySegmentName(excess.segment) + " is " + Centimetres(excess.metres) +
+                               " further off the scan than a fit's: the fit is the reference, and the first frames "
+                               "ease from it into the tracked poses");
   }
   if (first_fits_better) {
     from_first_frame->warnings.push_back(

@@ -82,6 +82,7 @@ void WriteTemplateRegistration(const std::string& correspondences_path, const Bo
   reg["metres_per_unit"] = registration.metres_per_unit;
   reg["up_in_scan"] = {registration.up_in_scan.x(), registration.up_in_scan.y(), registration.up_in_scan.z()};
   reg["warnings"] = registration.warnings;
+  if (registration.first_tracked_pose) reg["first_tracked_pose"] = PoseJson(body, *registration.first_tracked_pose);
   root["template_registration"] = reg;
   WriteTextFile(correspondences_path, root.dump(1) + "\n");
 }
@@ -99,6 +100,8 @@ ScanRegistration ReadTemplateRegistration(const std::string& correspondences_pat
   result.scan_height = reg.value("scan_height", 0.0);
   result.metres_per_unit = reg.value("metres_per_unit", 1.0);
   if (reg.contains("up_in_scan")) result.up_in_scan = Vec3(reg["up_in_scan"], correspondences_path, "up_in_scan");
+  if (reg.contains("first_tracked_pose"))
+    result.first_tracked_pose = ParsePose(body, reg["first_tracked_pose"], correspondences_path);
   if (reg.contains("warnings") && reg["warnings"].is_array())
     for (const auto& w : reg["warnings"])
       if (w.is_string()) result.warnings.push_back(w.get<std::string>());

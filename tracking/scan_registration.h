@@ -64,6 +64,10 @@ struct ScanRegistration {
   double metres_per_unit = 1.0;   // guessed length unit of the scan (0.1: decimetres, ...)
   Eigen::Vector3d up_in_scan = Eigen::Vector3d::UnitZ();  // the body's up (ankles to head) in the scan's frame
   std::vector<std::string> warnings;   // e.g. reference-pose check per segment, re-orientation
+  // Set when the scan stands in the first tracked frame's pose but that frame's template is not
+  // the reference (one of its segments is off the scan): the first tracked pose, from which the
+  // deformation's first frames ease into the tracked ones (pipeline/first_pose_seam.h).
+  std::optional<TemplatePose> first_tracked_pose;
 };
 
 // Fits the template (shape and pose) to a scan in its own reference pose. Throws InputError(scan_source, ...)

@@ -1,11 +1,13 @@
 // One register -> place path for run, correspond and animate: a registration seeded by a poor
 // tracked shape falls back to the first tracked pose, then to registering from the scan alone;
-// a scan in the first tracked frame's pose takes that frame's template as its reference.
+// a scan in the first tracked frame's pose takes that frame's template as its reference, or, where
+// one of its segments is off the scan, the fit, with the first frames eased from it.
 
 #include "pipeline/scan_correspondence.h"
 
 #include <gtest/gtest.h>
 
+#include "pipeline/first_pose_seam.h"
 #include "core/error.h"
 #include "core/skinning.h"
 #include "deform/confluent_motion.h"
@@ -145,6 +147,15 @@ TEST(ScanCorrespondence, ScanInTheFirstTrackedPoseIsReproducedAtFrameZero) {
   for (const std::string& warning : not_bent.registration.warnings)
     EXPECT_EQ(warning.find("that frame's template is the reference"), std::string::npos) << warning;
   EXPECT_GT((not_bent.reference.vertices - body.PosedMesh(shape, bent).vertices).cwiseAbs().maxCoeff(), 0.01);
+  // The scan still stands in that frame's pose: the first frames ease from the fit into the
+  // tracked poses, so frame 0 of the animated scan is the scan, and the seam's end the tracker's.
+  ASSERT_TRUE(not_bent.registration.first_tracked_pose);
+  FirstPoseSeam seam{not_bent.registration.pose, *not_bent.registration.first_tracked_pose, 10};
+  RowMatrixX3d eased = body.PosedMesh(shape, bent).vertices;
+  ApplyFirstPoseSeam(body, shape, seam, bent, 0, &eased);
+  ConfluentMotion from_fit(scan, not_bent.reference, not_bent.correspondences);
+  EXPECT_LT((from_fit.Deform(eased) - scan.vertices).rowwise().norm().maxCoeff(), 1e-3);
+  EXPECT_GT((from_fit.Deform(body.PosedMesh(shape, bent).vertices) - scan.vertices).rowwise().norm().maxCoeff(), 0.01);
 
   // The tracker's first frame with the arms raised: the scan is not in it; registered instead.
   TemplatePose raised = tracked;
@@ -154,6 +165,7 @@ TEST(ScanCorrespondence, ScanInTheFirstTrackedPoseIsReproducedAtFrameZero) {
   const ScanCorrespondence other = CorrespondTemplateToScan(body, scan, "held.ply", options);
   for (const std::string& warning : other.registration.warnings)
     EXPECT_EQ(warning.find("that frame's template is the reference"), std::string::npos) << warning;
+  EXPECT_FALSE(other.registration.first_tracked_pose);
   EXPECT_LT(other.registration.rms_residual_m, 0.015);
 }
 

@@ -206,6 +206,19 @@ TEST(ScanRegistration, RegistrationRoundTripsThroughCorrespondencesJson) {
   EXPECT_TRUE(back.pose.root_translation.isApprox(registration.pose.root_translation));
   EXPECT_DOUBLE_EQ(back.pose.dofs[kJointLeftElbow][0], 0.5);
   EXPECT_DOUBLE_EQ(back.rms_residual_m, 0.012);
+  EXPECT_FALSE(back.first_tracked_pose);
+
+  // With the first tracked pose of a scan in that frame's pose (the first frames' seam).
+  TemplatePose first = KnownPose();
+  first.dofs[kJointLeftElbow][0] = 0.7;
+  first.root_rotation = Vector3d(0.0, 0.1, 0.3);
+  registration.first_tracked_pose = first;
+  WriteTemplateRegistration(path, body, registration);
+  const ScanRegistration seam = ReadTemplateRegistration(path, body);
+  ASSERT_TRUE(seam.first_tracked_pose);
+  EXPECT_DOUBLE_EQ(seam.first_tracked_pose->dofs[kJointLeftElbow][0], 0.7);
+  EXPECT_TRUE(seam.first_tracked_pose->root_rotation.isApprox(first.root_rotation));
+  EXPECT_DOUBLE_EQ(seam.pose.dofs[kJointLeftElbow][0], 0.5);
 }
 
 TEST(PoseFromJoints, RecoversAPoseFromItsJointsAndRotations) {
