@@ -1,6 +1,7 @@
 #include "tracking/landmark_limbs.h"
 
 #include <algorithm>
+#include <limits>
 
 #include "tracking/pose_from_joints.h"
 
@@ -11,6 +12,16 @@ using Eigen::Vector3d;
 double LimbDisagreement(const std::vector<Vector3d>& joints, const LandmarkJoints& landmarks, Limb limb) {
   const int end = LimbJoints(limb).end;
   return landmarks.known(end) ? (joints[end] - landmarks.position[end]).norm() : -1.0;
+}
+
+bool SkirtHidesAnkle(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose, Limb limb) {
+  if (IsArm(limb) || shape.skirt_length_m <= 0) return false;
+  const Mesh posed = body.PosedMesh(shape, pose);
+  double hem_z = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < posed.num_faces(); ++f)
+    if (posed.face_labels[f] == static_cast<int>(BodySegment::kLowerTorso))
+      for (int k = 0; k < 3; ++k) hem_z = std::min(hem_z, posed.vertices(posed.faces(f, k), 2));
+  return hem_z < body.JointPositions(shape, pose)[LimbJoints(limb).end].z();
 }
 
 std::vector<TemplatePose> LimbsFromLandmarks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose,

@@ -14,6 +14,12 @@ namespace confluent {
 // world) and the landmarks'; -1 when the landmarks do not place it.
 double LimbDisagreement(const std::vector<Eigen::Vector3d>& joints, const LandmarkJoints& landmarks, Limb limb);
 
+// Whether the template's skirt (BodyShape::skirt_length_m) hides the ankle of `limb`, a leg, in
+// `pose`: its hem, the lowest point of the lower torso's capsule, hangs below the ankle. A
+// detector then guesses the leg, and the silhouettes hold only the skirt. False for an arm and
+// without a skirt.
+bool SkirtHidesAnkle(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose, Limb limb);
+
 // `pose` with `limb` turned towards the landmarks, the template's bone lengths kept and the rest
 // of the body unchanged, in two ways: the lower bone alone pointed at the landmarks' wrist or
 // ankle (the elbow or knee held: a forearm folded the wrong way), and both bones pointed as the

@@ -68,7 +68,7 @@ LimbChain LimbJoints(Limb limb) {
 }
 
 std::vector<TemplatePose> LimbHypotheses(const BodyTemplate& body, const TemplatePose& pose, Limb limb) {
-  const bool arm = limb == Limb::kLeftArm || limb == Limb::kRightArm;
+  const bool arm = IsArm(limb);
   const bool left = limb == Limb::kLeftArm || limb == Limb::kLeftLeg;
   const int root = LimbJoints(limb).root;
   const int middle = LimbJoints(limb).middle;

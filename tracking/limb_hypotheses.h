@@ -17,6 +17,9 @@ constexpr Limb kAllLimbs[] = {Limb::kLeftArm, Limb::kRightArm, Limb::kLeftLeg, L
 // "left_arm", "right_arm", "left_leg", "right_leg".
 const char* LimbName(Limb limb);
 
+// Whether `limb` is an arm (else a leg).
+inline bool IsArm(Limb limb) { return limb == Limb::kLeftArm || limb == Limb::kRightArm; }
+
 // A limb's chain: shoulder, elbow, wrist or hip, knee, ankle.
 struct LimbChain {
   int root, middle, end;

@@ -66,7 +66,7 @@ struct TrackerOptions {
   // than `landmark_iou_tolerance` (silhouettes hardly tell a forearm folded forward from one
   // folded back; the landmarks do). A refit that ends where it started is not kept: on the
   // suite, keeping those (a few mm closer) let the heavy body's arms drift (joint error max
-  // 3.3 -> 12.2 cm). Legs under a fitted skirt are left to the silhouettes.
+  // 3.3 -> 12.2 cm). A leg whose ankle a fitted skirt hides is left to the silhouettes.
   double landmark_disagreement_m = 0.08;
   double landmark_min_approach_m = 0.04;
   double landmark_iou_tolerance = 0.015;
