@@ -125,6 +125,7 @@ void TrackerOptions::Check() const {
   RequireOption(init_shape_proportion_weight >= 0, owner + "init_shape_proportion_weight",
                 init_shape_proportion_weight, ">= 0");
   RequireOption(limb_min_gain >= 0 && limb_min_gain < 1, owner + "limb_min_gain", limb_min_gain, "in [0, 1)");
+  RequireOption(landmark_check_every >= 0, owner + "landmark_check_every", landmark_check_every, ">= 0");
   RequireOption(landmark_disagreement_m > 0, owner + "landmark_disagreement_m", landmark_disagreement_m, "> 0");
   RequireOption(landmark_min_approach_m >= 0, owner + "landmark_min_approach_m", landmark_min_approach_m, ">= 0");
   RequireOption(landmark_iou_tolerance >= 0 && landmark_iou_tolerance < 1, owner + "landmark_iou_tolerance",
@@ -419,6 +420,8 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
                                    iou_history_.end());
   if (options_.limb_search && result.mean_iou < Median(window) - options_.limb_search_drop) {
     SearchLimbs(masks, use, observations, options_.limb_fits, &result);
+    SettleLimbsByLandmarks(masks, use, observations, &result);
+  } else if (options_.landmark_check_every > 0 && frame % options_.landmark_check_every == 0) {
     SettleLimbsByLandmarks(masks, use, observations, &result);
   }
   history_.push_back(result.pose);

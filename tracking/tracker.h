@@ -70,6 +70,10 @@ struct TrackerOptions {
   double landmark_disagreement_m = 0.08;
   double landmark_min_approach_m = 0.04;
   double landmark_iou_tolerance = 0.015;
+  // Besides the first frame and the lost-limb search, the landmarks are asked every this many
+  // frames (0: never): a limb held wrong where the overlap does not drop (a forearm folded the
+  // other way in front of the chest) is found there.
+  int landmark_check_every = 5;
   // Throws UsageError for out-of-range values.
   void Check() const;
 };
@@ -104,8 +108,9 @@ class Tracker {
 
   // Joints triangulated from a detector's landmarks in a frame (null: none for that frame).
   using LandmarkSource = std::function<std::shared_ptr<const LandmarkJoints>(int frame)>;
-  // Asked at the first frame and in the frames where the lost-limb search runs: the landmarks
-  // settle limbs that the silhouettes leave ambiguous (flag "landmarks:<limb>").
+  // Asked at the first frame, in the frames where the lost-limb search runs and every
+  // TrackerOptions::landmark_check_every frames: the landmarks settle limbs that the silhouettes
+  // leave ambiguous (flag "landmarks:<limb>").
   void UseLandmarks(LandmarkSource source) { landmarks_ = std::move(source); }
 
   // Continues from saved state instead of Initialize (a resumed run, or a shard boundary): the

@@ -132,5 +132,37 @@ TEST(LandmarkLimbs, TheTrackerFollowsTheLandmarksWhereTheSilhouettesHoldBothFold
   EXPECT_GT((kept.joints[kJointLeftWrist] - body.JointPositions(shape, up)[kJointLeftWrist]).norm(), 0.15);
 }
 
+// A forearm held the wrong way while the overlap does not drop (no lost-limb search): the
+// landmarks asked every TrackerOptions::landmark_check_every frames still turn it, in those
+// frames only.
+TEST(LandmarkLimbs, TheTrackerAsksTheLandmarksEveryFewFramesWithoutAnOverlapDrop) {
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(1.75);
+  const Rig rig = testing::CameraRing(8, 200, 150);
+  const TemplatePose inwards = ForearmFolded(body, true), up = ForearmFolded(body, false);
+  const std::vector<Image> masks = UnionMasks(body, shape, inwards, up, rig);
+  const LandmarkJoints landmarks = LandmarksOf(body, shape, up);
+  auto left_wrist_error = [&](int every, int frame, int* asked) {
+    TrackerOptions options;
+    options.landmark_check_every = every;
+    Tracker tracker(rig, {}, options);
+    tracker.UseLandmarks([&](int) {
+      ++*asked;
+      return std::make_shared<const LandmarkJoints>(landmarks);
+    });
+    tracker.Resume(shape, {inwards, inwards}, std::vector<double>(10, 0.0));  // nothing to drop from
+    const TrackedFrame result = tracker.Track(frame, masks);
+    return (result.joints[kJointLeftWrist] - body.JointPositions(shape, up)[kJointLeftWrist]).norm();
+  };
+  int asked = 0;
+  EXPECT_LT(left_wrist_error(5, 10, &asked), 0.05);
+  EXPECT_EQ(asked, 1);
+  asked = 0;
+  EXPECT_GT(left_wrist_error(5, 11, &asked), 0.15);
+  EXPECT_EQ(asked, 0);
+  EXPECT_GT(left_wrist_error(0, 10, &asked), 0.15);
+  EXPECT_EQ(asked, 0);
+}
+
 }  // namespace
 }  // namespace confluent
