@@ -102,14 +102,24 @@ TEST(LandmarkLimbs, TheLowerBoneTurnsOntoTheLandmarksWristTheRestStays) {
   EXPECT_LT(LimbDisagreement(start, unknown, Limb::kLeftArm), 0.0);
 }
 
+// Eight cameras see the union of the body with its left forearm folded both ways.
+struct FoldScene {
+  BodyTemplate body;
+  BodyShape shape = BodyShape::Uniform(1.75);
+  Rig rig = testing::CameraRing(8, 200, 150);
+  TemplatePose inwards = ForearmFolded(body, true), up = ForearmFolded(body, false);
+  std::vector<Image> masks = UnionMasks(body, shape, inwards, up, rig);
+};
+
 // The tracker holds the forearm one way when a frame's overlap drops (the masks hold both
 // folds); the landmarks say which: the tracker follows them, either way round.
 TEST(LandmarkLimbs, TheTrackerFollowsTheLandmarksWhereTheSilhouettesHoldBothFolds) {
-  const BodyTemplate body;
-  const BodyShape shape = BodyShape::Uniform(1.75);
-  const Rig rig = testing::CameraRing(8, 200, 150);
-  const TemplatePose inwards = ForearmFolded(body, true), up = ForearmFolded(body, false);
-  const std::vector<Image> masks = UnionMasks(body, shape, inwards, up, rig);
+  const FoldScene scene;
+  const BodyTemplate& body = scene.body;
+  const BodyShape& shape = scene.shape;
+  const Rig& rig = scene.rig;
+  const TemplatePose &inwards = scene.inwards, &up = scene.up;
+  const std::vector<Image>& masks = scene.masks;
   auto left_wrist_error = [&](const TemplatePose& held, const TemplatePose& said, std::string* flags) {
     TrackerOptions options;
     Tracker tracker(rig, {}, options);
@@ -136,23 +146,19 @@ TEST(LandmarkLimbs, TheTrackerFollowsTheLandmarksWhereTheSilhouettesHoldBothFold
 // landmarks asked every TrackerOptions::landmark_check_every frames still turn it, in those
 // frames only.
 TEST(LandmarkLimbs, TheTrackerAsksTheLandmarksEveryFewFramesWithoutAnOverlapDrop) {
-  const BodyTemplate body;
-  const BodyShape shape = BodyShape::Uniform(1.75);
-  const Rig rig = testing::CameraRing(8, 200, 150);
-  const TemplatePose inwards = ForearmFolded(body, true), up = ForearmFolded(body, false);
-  const std::vector<Image> masks = UnionMasks(body, shape, inwards, up, rig);
-  const LandmarkJoints landmarks = LandmarksOf(body, shape, up);
+  const FoldScene scene;
+  const LandmarkJoints landmarks = LandmarksOf(scene.body, scene.shape, scene.up);
   auto left_wrist_error = [&](int every, int frame, int* asked) {
     TrackerOptions options;
     options.landmark_check_every = every;
-    Tracker tracker(rig, {}, options);
+    Tracker tracker(scene.rig, {}, options);
     tracker.UseLandmarks([&](int) {
       ++*asked;
       return std::make_shared<const LandmarkJoints>(landmarks);
     });
-    tracker.Resume(shape, {inwards, inwards}, std::vector<double>(10, 0.0));  // nothing to drop from
-    const TrackedFrame result = tracker.Track(frame, masks);
-    return (result.joints[kJointLeftWrist] - body.JointPositions(shape, up)[kJointLeftWrist]).norm();
+    tracker.Resume(scene.shape, {scene.inwards, scene.inwards}, std::vector<double>(10, 0.0));  // nothing to drop from
+    const TrackedFrame result = tracker.Track(frame, scene.masks);
+    return (result.joints[kJointLeftWrist] - scene.body.JointPositions(scene.shape, scene.up)[kJointLeftWrist]).norm();
   };
   int asked = 0;
   EXPECT_LT(left_wrist_error(5, 10, &asked), 0.05);
