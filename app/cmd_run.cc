@@ -85,7 +85,7 @@ CommandSpec MakeRunCommand() {
       {"refine-iterations", "N", "rounds of silhouette refinement per frame (default 18)"},
       {"refine-keyframes", "N", "refine only every N-th frame from its deformation, the others from the previous frame's correction in fewer rounds (default 1)"},
       {"no-photo-refine", "", "skip the photo-consistency refinement that follows the silhouette refinement"},
-      {"no-landmarks", "", "track from the silhouettes alone, without BlazePose's body landmarks (first frame, lost limbs)"},
+      {"no-landmarks", "", "track from the silhouettes alone, without BlazePose's body landmarks (first frame, lost limbs, every 5th frame)"},
       {"no-render", "", "skip the 3D-video render stage"},
       {"render-width", "PX", "width of the orbit video (default 960)"},
       {"render-height", "PX", "height of the orbit video (default 720)"},

@@ -83,7 +83,7 @@ CommandSpec MakeTrackCommand() {
       {"overlay-every", "N", "write overlays every N frames (default 25; 0 = none)"},
       {"downscale", "N", "mask reduction for fitting (default 0 = automatic, about 256 px across)"},
       {"threads", "N", "solver threads (default 2)"},
-      {"no-landmarks", "", "do not ask BlazePose's landmarks where a limb is ambiguous (first frame, lost limbs)"},
+      {"no-landmarks", "", "do not ask BlazePose's landmarks where a limb is ambiguous (first frame, lost limbs, every 5th frame)"},
   };
   spec.run = RunTrack;
   return spec;
