@@ -40,10 +40,10 @@ struct ScanCorrespondence {
 // first tracked pose, the registration is also started from it and the better fit kept; when
 // that frame's template, unfitted, fits the scan about as well, segment by segment, it is the
 // reference itself (the scan stands in the first frame's pose); when it does as a whole but a
-// segment of it lies off the scan, the fit is the reference and registration.first_tracked_pose is set, for the deformation's
-// seam (pipeline/first_pose_seam.h). When the seeded registrations fail, it is done from
-// the scan alone (with a warning in registration.warnings). Throws InputError naming the scan or
-// a correspondences file, UsageError for a bad option.
+// segment of it lies off the scan, the fit is the reference and registration.first_tracked_pose
+// is set, for the deformation's seam (pipeline/first_pose_seam.h). When the seeded registrations
+// fail, it is done from the scan alone (with a warning in registration.warnings). Throws
+// InputError naming the scan or a correspondences file, UsageError for a bad option.
 ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh& scan, const std::string& scan_path,
                                             const ScanCorrespondenceOptions& options);
 
