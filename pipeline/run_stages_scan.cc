@@ -42,10 +42,13 @@ StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& 
   options.given_path = inputs.correspondences_path;
   try {
     const PosesFile tracked = ReadPosesJson(inputs.folder.Path("poses.json"), body);
-    if (!tracked.frames.empty()) options.first_tracked_pose = tracked.frames.front().pose;
+    if (!tracked.frames.empty() && tracked.frames.front().frame == 0)
+      options.first_tracked_pose = tracked.frames.front().pose;
   } catch (const InputError&) {
-    // No readable poses.json (a shard): registration without the first tracked pose.
+    // No readable poses.json.
   }
+  // Without frame 0 (a first shard that starts later) the registration goes without the first
+  // tracked pose: the seam it may record eases frames from 0 on.
   const ScanCorrespondence result = CorrespondTemplateToScan(body, *inputs.scan, inputs.scan_path, options);
   char residual[64];
   std::snprintf(residual, sizeof residual, "template registered to the scan: rms residual %.2f cm",
@@ -74,12 +77,8 @@ struct RunSeam {
 
 std::optional<RunSeam> ReadRunSeam(const RunInputs& inputs, const BodyTemplate& body,
                                    const std::string& correspondences_path) {
-  ScanRegistration registration;
-  try {
-    registration = ReadTemplateRegistration(correspondences_path, body);
-  } catch (const InputError&) {
-    return std::nullopt;  // given correspondences without a registration
-  }
+  if (!HasTemplateRegistration(correspondences_path)) return std::nullopt;  // given correspondences
+  const ScanRegistration registration = ReadTemplateRegistration(correspondences_path, body);
   if (!registration.first_tracked_pose) return std::nullopt;
   RunSeam run{{registration.pose, *registration.first_tracked_pose, FirstPoseSeamFrames(inputs.fps)},
               ReadPosesJson(inputs.folder.Path("poses.json"), body)};

@@ -38,20 +38,23 @@ Vector3d Vec3(const nlohmann::json& value, const std::string& path, const std::s
   return v;
 }
 
-TemplatePose ParsePose(const BodyTemplate& body, const nlohmann::json& value, const std::string& path) {
+// Parses the pose `value`, named `what` in errors (its key in the file).
+TemplatePose ParsePose(const BodyTemplate& body, const nlohmann::json& value, const std::string& path,
+                       const std::string& what) {
   TemplatePose pose;
-  if (!value.is_object()) throw InputError(path, "pose: expected an object");
-  pose.root_translation = Vec3(value.value("root_translation", nlohmann::json()), path, "root_translation");
-  pose.root_rotation = Vec3(value.value("root_rotation_vector", nlohmann::json()), path, "root_rotation_vector");
+  if (!value.is_object()) throw InputError(path, what + ": expected an object");
+  pose.root_translation = Vec3(value.value("root_translation", nlohmann::json()), path, what + ".root_translation");
+  pose.root_rotation =
+      Vec3(value.value("root_rotation_vector", nlohmann::json()), path, what + ".root_rotation_vector");
   const auto angles = value.value("joint_angles", nlohmann::json::object());
   for (int j = 0; j < kNumTemplateJoints; ++j) {
     const int n = body.dofs()[j].num_dof();
     const std::string& name = body.joint_names()[j];
     if (n == 0 || !angles.contains(name)) continue;
     const auto& a = angles[name];
-    if (!a.is_array() || static_cast<int>(a.size()) != n) throw InputError(path, "joint_angles: " + name + " needs " + std::to_string(n) + " values");
+    if (!a.is_array() || static_cast<int>(a.size()) != n) throw InputError(path, what + ".joint_angles: " + name + " needs " + std::to_string(n) + " values");
     for (int k = 0; k < n; ++k) {
-      if (!a[k].is_number()) throw InputError(path, "joint_angles: " + name + " must hold numbers");
+      if (!a[k].is_number()) throw InputError(path, what + ".joint_angles: " + name + " must hold numbers");
       pose.dofs[j][k] = a[k].get<double>();
     }
   }
@@ -87,6 +90,11 @@ void WriteTemplateRegistration(const std::string& correspondences_path, const Bo
   WriteTextFile(correspondences_path, root.dump(1) + "\n");
 }
 
+bool HasTemplateRegistration(const std::string& correspondences_path) {
+  const nlohmann::json root = ReadJson(correspondences_path);
+  return root.is_object() && root.contains("template_registration");
+}
+
 ScanRegistration ReadTemplateRegistration(const std::string& correspondences_path, const BodyTemplate& body) {
   const nlohmann::json root = ReadJson(correspondences_path);
   if (!root.is_object() || !root.contains("template_registration"))
@@ -94,14 +102,15 @@ ScanRegistration ReadTemplateRegistration(const std::string& correspondences_pat
   const auto& reg = root["template_registration"];
   ScanRegistration result;
   result.shape = tracking_internal::ParseBodyShapeJson(reg.value("shape", nlohmann::json()), correspondences_path);
-  result.pose = ParsePose(body, reg.value("pose", nlohmann::json()), correspondences_path);
+  result.pose = ParsePose(body, reg.value("pose", nlohmann::json()), correspondences_path, "template_registration.pose");
   result.rms_residual_m = reg.value("rms_residual", 0.0);
   result.trimmed_rms_residual_m = reg.value("trimmed_rms_residual", 0.0);
   result.scan_height = reg.value("scan_height", 0.0);
   result.metres_per_unit = reg.value("metres_per_unit", 1.0);
   if (reg.contains("up_in_scan")) result.up_in_scan = Vec3(reg["up_in_scan"], correspondences_path, "up_in_scan");
   if (reg.contains("first_tracked_pose"))
-    result.first_tracked_pose = ParsePose(body, reg["first_tracked_pose"], correspondences_path);
+    result.first_tracked_pose =
+        ParsePose(body, reg["first_tracked_pose"], correspondences_path, "template_registration.first_tracked_pose");
   if (reg.contains("warnings") && reg["warnings"].is_array())
     for (const auto& w : reg["warnings"])
       if (w.is_string()) result.warnings.push_back(w.get<std::string>());

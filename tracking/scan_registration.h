@@ -91,6 +91,10 @@ std::vector<double> SegmentRotationDifferencesDeg(const BodyTemplate& body, cons
 void WriteTemplateRegistration(const std::string& correspondences_path, const BodyTemplate& body,
                                const ScanRegistration& registration);
 
+// Whether the correspondences.json `correspondences_path` holds a "template_registration" (given
+// correspondences may not). Throws InputError naming the file when it is missing or not JSON.
+bool HasTemplateRegistration(const std::string& correspondences_path);
+
 // Reads the "template_registration" of a correspondences.json. Throws InputError naming the
 // file when it is missing, is not JSON, or has no (or a malformed) "template_registration".
 ScanRegistration ReadTemplateRegistration(const std::string& correspondences_path,

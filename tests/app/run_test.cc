@@ -447,6 +447,31 @@ TEST_F(RunCommandTest, ScansMissingHereAndThereAreRewrittenAsOneRunWroteThem) {
   }
 }
 
+// A hand-edited registration whose first tracked pose is malformed stops the deformation with
+// the file and the key named; the finished scans stay.
+TEST_F(RunCommandTest, MalformedFirstTrackedPoseInTheRegistrationIsNamed) {
+  testing::TempDir out;
+  const std::string run = out / "run";
+  fs::copy(ReferenceRun(), run, fs::copy_options::recursive);
+  ASSERT_TRUE(fs::remove(run + "/scan/000004.ply"));
+  const std::string path = run + "/correspondences.json";
+  nlohmann::json root;
+  {
+    std::ifstream in(path);
+    root = nlohmann::json::parse(in);
+  }
+  ASSERT_TRUE(root.contains("template_registration"));
+  root["template_registration"]["first_tracked_pose"] = "arms raised";
+  std::ofstream(path) << root.dump();
+  const testing::CommandResult result = RunConfluent(RunArgs(run));
+  EXPECT_EQ(result.exit_code, 1) << result.stdout_text << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find(path + ": template_registration.first_tracked_pose: expected an object"),
+            std::string::npos)
+      << result.stderr_text;
+  EXPECT_TRUE(fs::exists(run + "/scan/000003.ply"));
+  EXPECT_FALSE(fs::exists(run + "/scan/000004.ply"));
+}
+
 TEST_F(RunCommandTest, WrongExcludedCameraNameIsRefused) {
   testing::TempDir out;
   const testing::CommandResult result =

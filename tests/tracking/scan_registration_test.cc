@@ -221,6 +221,34 @@ TEST(ScanRegistration, RegistrationRoundTripsThroughCorrespondencesJson) {
   EXPECT_DOUBLE_EQ(seam.pose.dofs[kJointLeftElbow][0], 0.5);
 }
 
+TEST(ScanRegistration, MalformedFirstTrackedPoseIsNamed) {
+  const BodyTemplate body;
+  testing::TempDir dir;
+  const std::string path = dir / "c.json";
+  std::ofstream(path) << "{\"pairs\": []}";
+  EXPECT_FALSE(HasTemplateRegistration(path));
+  ScanRegistration registration;
+  registration.pose = KnownPose();
+  WriteTemplateRegistration(path, body, registration);
+  EXPECT_TRUE(HasTemplateRegistration(path));
+  // A hand edit: the elbow of the first tracked pose given one angle too many.
+  std::ifstream in(path);
+  nlohmann::json root = nlohmann::json::parse(in);
+  root["template_registration"]["first_tracked_pose"] = root["template_registration"]["pose"];
+  root["template_registration"]["first_tracked_pose"]["joint_angles"]["left_elbow"] = {0.1, 0.2};
+  std::ofstream(path) << root.dump();
+  try {
+    ReadTemplateRegistration(path, body);
+    ADD_FAILURE() << "a malformed first_tracked_pose was read";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("c.json"), std::string::npos) << what;
+    EXPECT_NE(what.find("first_tracked_pose.joint_angles: left_elbow"), std::string::npos) << what;
+  }
+  std::ofstream(path) << "{\"pairs\": [";
+  EXPECT_THROW(HasTemplateRegistration(path), InputError);
+}
+
 TEST(PoseFromJoints, RecoversAPoseFromItsJointsAndRotations) {
   const BodyTemplate body;
   const BodyShape shape = KnownShape();
