@@ -130,6 +130,8 @@ void TrackerOptions::Check() const {
   RequireOption(landmark_min_approach_m >= 0, owner + "landmark_min_approach_m", landmark_min_approach_m, ">= 0");
   RequireOption(landmark_iou_tolerance >= 0 && landmark_iou_tolerance < 1, owner + "landmark_iou_tolerance",
                 landmark_iou_tolerance, "in [0, 1)");
+  RequireOption(landmark_full_tolerance_m > landmark_disagreement_m, owner + "landmark_full_tolerance_m",
+                landmark_full_tolerance_m, "> landmark_disagreement_m");
 }
 
 Tracker::Tracker(const Rig& rig, const std::vector<bool>& excluded, const TrackerOptions& options)
@@ -196,6 +198,12 @@ void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<boo
   }
 }
 
+double LandmarkIouTolerance(const TrackerOptions& options, double disagreement_m) {
+  const double ramp = (disagreement_m - options.landmark_disagreement_m) /
+                      (options.landmark_full_tolerance_m - options.landmark_disagreement_m);
+  return options.landmark_iou_tolerance * std::clamp(ramp, 0.0, 1.0);
+}
+
 void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std::vector<bool>& use,
                                      const SilhouetteObservations& observations, TrackedFrame* result) {
   if (!landmarks_) return;
@@ -210,11 +218,12 @@ void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std:
     if (SkirtHidesAnkle(body_, shape_, result->pose, limb)) continue;
     const double before = LimbDisagreement(result->joints, landmarks, limb);
     if (before < options_.landmark_disagreement_m) continue;  // agrees, or the landmarks do not place it
+    const double tolerance = LandmarkIouTolerance(options_, before);
     TrackedFrame best;
     for (const TemplatePose& hypothesis : LimbsFromLandmarks(body_, shape_, result->pose, limb, landmarks)) {
       TrackedFrame candidate = FitLimbHypothesis(hypothesis, result->frame, masks, use, observations);
       const double after = LimbDisagreement(candidate.joints, landmarks, limb);
-      if (after <= before - options_.landmark_min_approach_m && candidate.mean_iou >= result->mean_iou - options_.landmark_iou_tolerance &&
+      if (after <= before - options_.landmark_min_approach_m && candidate.mean_iou >= result->mean_iou - tolerance &&
           (best.joints.empty() || candidate.mean_iou > best.mean_iou))
         best = std::move(candidate);
     }

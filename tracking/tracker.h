@@ -70,6 +70,10 @@ struct TrackerOptions {
   double landmark_disagreement_m = 0.08;
   double landmark_min_approach_m = 0.04;
   double landmark_iou_tolerance = 0.015;
+  // The tolerance grows linearly from 0 at `landmark_disagreement_m` to the full one at this
+  // distance: BlazePose's wrists lay 9-14 cm inside the forward jumps' arms held in front of the
+  // chest, and turning a wrist that was 6 cm off onto them lost 0.006 of IoU (and 10 cm).
+  double landmark_full_tolerance_m = 0.16;
   // Besides the first frame and the lost-limb search, the landmarks are asked every this many
   // frames (0: never): a limb held wrong where the overlap does not drop (a forearm folded the
   // other way in front of the chest) is found there.
@@ -77,6 +81,10 @@ struct TrackerOptions {
   // Throws UsageError for out-of-range values.
   void Check() const;
 };
+
+// The mean IoU that a limb turned onto landmarks `disagreement_m` away from its end may lose and
+// still be kept (TrackerOptions::landmark_full_tolerance_m).
+double LandmarkIouTolerance(const TrackerOptions& options, double disagreement_m);
 
 // Result of one frame.
 struct TrackedFrame {

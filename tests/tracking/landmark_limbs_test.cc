@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "core/error.h"
 #include "silhouette/overlap.h"
 #include "tests/support/camera_ring.h"
 #include "tracking/landmark_limbs.h"
@@ -100,6 +101,22 @@ TEST(LandmarkLimbs, TheLowerBoneTurnsOntoTheLandmarksWristTheRestStays) {
   unknown.cameras[kJointLeftWrist] = 0;
   EXPECT_TRUE(LimbsFromLandmarks(body, shape, from, Limb::kLeftArm, unknown).empty());
   EXPECT_LT(LimbDisagreement(start, unknown, Limb::kLeftArm), 0.0);
+}
+
+// Overlap is given up for landmarks only as far as they disagree: nothing at the threshold,
+// the full tolerance from landmark_full_tolerance_m on, linearly between.
+TEST(LandmarkLimbs, TheOverlapGivenUpGrowsWithTheDisagreement) {
+  TrackerOptions options;
+  options.landmark_disagreement_m = 0.08;
+  options.landmark_full_tolerance_m = 0.16;
+  options.landmark_iou_tolerance = 0.015;
+  EXPECT_DOUBLE_EQ(LandmarkIouTolerance(options, 0.08), 0.0);
+  EXPECT_NEAR(LandmarkIouTolerance(options, 0.10), 0.00375, 1e-12);
+  EXPECT_NEAR(LandmarkIouTolerance(options, 0.12), 0.0075, 1e-12);
+  EXPECT_DOUBLE_EQ(LandmarkIouTolerance(options, 0.16), 0.015);
+  EXPECT_DOUBLE_EQ(LandmarkIouTolerance(options, 0.40), 0.015);
+  options.landmark_full_tolerance_m = 0.0;
+  EXPECT_THROW(options.Check(), UsageError);
 }
 
 // Eight cameras see the union of the body with its left forearm folded both ways.
