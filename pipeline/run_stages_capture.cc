@@ -182,7 +182,7 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
     if (!tracker.initialized() && frame > 0 && TrackedFrameFinished(inputs.folder, frame - 1)) {
       // Continue from the saved state of the frames just before (a resumed run or a shard boundary).
       std::vector<TemplatePose> poses;
-      std::vector<double> ious;
+      std::vector<double> ious, contours;
       BodyShape saved_shape;
       for (int back = std::max(0, frame - Tracker::kIouWindow); back < frame; ++back) {
         if (!TrackedFrameFinished(inputs.folder, back)) continue;
@@ -190,8 +190,9 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
         saved_shape = state.shape;
         if (back >= frame - 4) poses.push_back(state.frames[0].pose);
         ious.push_back(state.frames[0].mean_iou);
+        contours.push_back(state.frames[0].fit.mean_contour_px);
       }
-      tracker.Resume(saved_shape, poses, ious);
+      tracker.Resume(saved_shape, poses, ious, contours);
     }
     const std::vector<Image> masks = TrackingMasks(inputs, frame);
     const double frame_start = NowSeconds();

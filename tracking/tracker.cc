@@ -119,6 +119,8 @@ void TrackerOptions::Check() const {
   RequireOption(iou_downscale >= 0, owner + "iou_downscale", iou_downscale, ">= 0");
   RequireOption(limb_search_drop >= 0 && limb_search_drop < 1, owner + "limb_search_drop", limb_search_drop,
                 "in [0, 1)");
+  RequireOption(limb_search_contour_rise == 0 || limb_search_contour_rise > 1, owner + "limb_search_contour_rise",
+                limb_search_contour_rise, "0 or > 1");
   RequireOption(limb_fits >= 1 && limb_fits <= 16, owner + "limb_fits", limb_fits, "in [1, 16]");
   RequireOption(limb_fits_init >= 1 && limb_fits_init <= 16, owner + "limb_fits_init", limb_fits_init, "in [1, 16]");
   RequireOption(init_shape_prior_weight >= 0, owner + "init_shape_prior_weight", init_shape_prior_weight, ">= 0");
@@ -267,6 +269,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   placement_ = EstimatePlacementFromHull(rig_, masks, use);
   history_.clear();
   iou_history_.clear();
+  contour_history_.clear();
   last_mask_hashes_.clear();
   if (!placement_.ok) {
     result.flags.push_back("no_hull");
@@ -347,6 +350,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   initialized_ = true;
   history_.push_back(result.pose);
   iou_history_.push_back(result.mean_iou);
+  contour_history_.push_back(result.fit.mean_contour_px);
   for (const Image& m : masks) last_mask_hashes_.push_back(HashMask(m));
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
@@ -354,11 +358,12 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
 }
 
 void Tracker::Resume(const BodyShape& shape, const std::vector<TemplatePose>& recent_poses,
-                     const std::vector<double>& recent_ious) {
+                     const std::vector<double>& recent_ious, const std::vector<double>& recent_contour_px) {
   if (recent_poses.empty()) throw std::invalid_argument("Tracker::Resume: no previous pose");
   shape_ = shape;
   history_.assign(recent_poses.end() - std::min<std::size_t>(recent_poses.size(), 4), recent_poses.end());
   iou_history_ = recent_ious;
+  contour_history_ = recent_contour_px;
   last_mask_hashes_.clear();
   initialized_ = true;
 }
@@ -427,7 +432,14 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   // A lost limb: the overlap falls below what this performance has shown lately.
   const std::vector<double> window(iou_history_.end() - std::min<std::size_t>(iou_history_.size(), kIouWindow),
                                    iou_history_.end());
-  if (options_.limb_search && result.mean_iou < Median(window) - options_.limb_search_drop) {
+  // ... or the contours are explained much worse than lately: a forearm held inside the torso's
+  // silhouette in the front cameras costs little overlap, but its true outline in the others goes
+  // unexplained.
+  const bool contour_rise = options_.limb_search_contour_rise > 0 && contour_history_.size() >= 3 &&
+                            result.fit.mean_contour_px > options_.limb_search_contour_rise * Median(contour_history_);
+  contour_history_.push_back(result.fit.mean_contour_px);
+  if (contour_history_.size() > static_cast<std::size_t>(kIouWindow)) contour_history_.erase(contour_history_.begin());
+  if (options_.limb_search && (contour_rise || result.mean_iou < Median(window) - options_.limb_search_drop)) {
     SearchLimbs(masks, use, observations, options_.limb_fits, &result);
     SettleLimbsByLandmarks(masks, use, observations, &result);
   } else if (options_.landmark_check_every > 0 && frame % options_.landmark_check_every == 0) {

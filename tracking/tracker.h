@@ -57,6 +57,9 @@ struct TrackerOptions {
   // and one is kept when it raises the frame's mean IoU by `limb_min_gain`.
   bool limb_search = true;
   double limb_search_drop = 0.02;
+  // ... and when the fit's mean contour residual (SilhouetteFitSummary::mean_contour_px) exceeds
+  // this multiple of its median over the last kIouWindow frames (0: never).
+  double limb_search_contour_rise = 1.3;
   int limb_fits = 2;
   int limb_fits_init = 4;          // at initialisation (once per run), more of them are fitted
   double limb_min_gain = 0.005;
@@ -123,8 +126,9 @@ class Tracker {
 
   // Continues from saved state instead of Initialize (a resumed run, or a shard boundary): the
   // fitted shape, the accepted poses of the frames just before (the last 4 are used) and their
-  // mean IoUs (the last kIouWindow), oldest first.
-  void Resume(const BodyShape& shape, const std::vector<TemplatePose>& recent_poses, const std::vector<double>& recent_ious);
+  // mean IoUs and mean contour residuals (the last kIouWindow), oldest first.
+  void Resume(const BodyShape& shape, const std::vector<TemplatePose>& recent_poses, const std::vector<double>& recent_ious,
+              const std::vector<double>& recent_contour_px);
 
   bool initialized() const { return initialized_; }
   const BodyTemplate& body() const { return body_; }
@@ -156,6 +160,7 @@ class Tracker {
   bool initialized_ = false;
   std::vector<TemplatePose> history_;     // accepted poses, most recent last
   std::vector<double> iou_history_;
+  std::vector<double> contour_history_;
   std::vector<std::size_t> last_mask_hashes_;
   LandmarkSource landmarks_;
 };

@@ -142,7 +142,7 @@ TEST(LandmarkLimbs, TheTrackerFollowsTheLandmarksWhereTheSilhouettesHoldBothFold
     Tracker tracker(rig, {}, options);
     const LandmarkJoints landmarks = LandmarksOf(body, shape, said);
     tracker.UseLandmarks([&](int) { return std::make_shared<const LandmarkJoints>(landmarks); });
-    tracker.Resume(shape, {held, held}, std::vector<double>(10, 0.99));  // the frames before were explained
+    tracker.Resume(shape, {held, held}, std::vector<double>(10, 0.99), {});  // the frames before were explained
     const TrackedFrame result = tracker.Track(10, masks);
     for (const std::string& flag : result.flags) *flags += flag + " ";
     return (result.joints[kJointLeftWrist] - body.JointPositions(shape, said)[kJointLeftWrist]).norm();
@@ -154,7 +154,7 @@ TEST(LandmarkLimbs, TheTrackerFollowsTheLandmarksWhereTheSilhouettesHoldBothFold
   EXPECT_NE(flags_inwards.find("landmarks:left_arm"), std::string::npos) << flags_inwards;
   // Without a landmark source the tracker keeps the fold it held: the silhouettes do not decide.
   Tracker plain(rig, {}, TrackerOptions{});
-  plain.Resume(shape, {inwards, inwards}, std::vector<double>(10, 0.99));
+  plain.Resume(shape, {inwards, inwards}, std::vector<double>(10, 0.99), {});
   const TrackedFrame kept = plain.Track(10, masks);
   EXPECT_GT((kept.joints[kJointLeftWrist] - body.JointPositions(shape, up)[kJointLeftWrist]).norm(), 0.15);
 }
@@ -173,7 +173,7 @@ TEST(LandmarkLimbs, TheTrackerAsksTheLandmarksEveryFewFramesWithoutAnOverlapDrop
       ++*asked;
       return std::make_shared<const LandmarkJoints>(landmarks);
     });
-    tracker.Resume(scene.shape, {scene.inwards, scene.inwards}, std::vector<double>(10, 0.0));  // nothing to drop from
+    tracker.Resume(scene.shape, {scene.inwards, scene.inwards}, std::vector<double>(10, 0.0), {});  // nothing to drop from
     const TrackedFrame result = tracker.Track(frame, scene.masks);
     return (result.joints[kJointLeftWrist] - scene.body.JointPositions(scene.shape, scene.up)[kJointLeftWrist]).norm();
   };

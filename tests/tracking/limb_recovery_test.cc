@@ -108,7 +108,7 @@ TEST(LimbRecovery, LeftRightArmSwapIsUndone) {
     TrackerOptions options;
     options.limb_search = limb_search;
     Tracker tracker(rig, {}, options);
-    tracker.Resume(shape, {swapped, swapped}, std::vector<double>(10, 0.95));
+    tracker.Resume(shape, {swapped, swapped}, std::vector<double>(10, 0.95), {});
     TrackedFrame result;
     for (int f = 10; f < 12; ++f) result = tracker.Track(f, masks);
     double worst = 0.0;
@@ -118,6 +118,36 @@ TEST(LimbRecovery, LeftRightArmSwapIsUndone) {
   };
   EXPECT_GT(track(false), 0.15);  // the frame-to-frame fit keeps the swap
   EXPECT_LT(track(true), 0.05);
+}
+
+// The tracker continues from a state with the left forearm folded across the chest, where the
+// front cameras see it inside the torso, while the arm reaches straight forward; the overlap
+// history gives no drop to notice (the IoUs before: 0), the contours before were explained to 0.3
+// px. The rise of the contour residual starts the lost-limb search, which straightens the arm.
+TEST(LimbRecovery, ArmLostWithoutAnOverlapDropIsFoundByItsContours) {
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(1.75);
+  const Rig rig = testing::CameraRing(8, 320, 240);
+  TemplatePose truth;
+  truth.root_rotation = Eigen::Vector3d(0, 0, 0.3);
+  truth.dofs[kJointLeftShoulder] = ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-0.1, 1.0, 0.0));  // forward
+  TemplatePose folded = truth;
+  folded.dofs[kJointLeftShoulder] = ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-0.2, 0.3, -1.0));
+  folded.dofs[kJointLeftElbow] = {1.9, 0, 0};
+  const std::vector<Image> masks = Masks(body, shape, truth, rig);
+  auto track = [&](double contour_rise, std::string* flags) {
+    TrackerOptions options;
+    options.limb_search_contour_rise = contour_rise;
+    Tracker tracker(rig, {}, options);
+    tracker.Resume(shape, {folded, folded}, std::vector<double>(10, 0.0), std::vector<double>(10, 0.3));
+    const TrackedFrame result = tracker.Track(10, masks);
+    for (const std::string& flag : result.flags) *flags += flag + " ";
+    return JointError(body, shape, truth, result, kJointLeftWrist);
+  };
+  std::string plain_flags, flags;
+  EXPECT_GT(track(0.0, &plain_flags), 0.15) << plain_flags;  // the frame-to-frame fit keeps the fold
+  EXPECT_LT(track(1.3, &flags), 0.05) << flags;
+  EXPECT_NE(flags.find("limb:left_arm"), std::string::npos) << flags;
 }
 
 TEST(LimbHypotheses, MoveOnlyTheirLimbWithinTheJointLimits) {
