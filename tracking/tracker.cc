@@ -437,8 +437,6 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   // unexplained.
   const bool contour_rise = options_.limb_search_contour_rise > 0 && contour_history_.size() >= 3 &&
                             result.fit.mean_contour_px > options_.limb_search_contour_rise * Median(contour_history_);
-  contour_history_.push_back(result.fit.mean_contour_px);
-  if (contour_history_.size() > static_cast<std::size_t>(kIouWindow)) contour_history_.erase(contour_history_.begin());
   if (options_.limb_search && (contour_rise || result.mean_iou < Median(window) - options_.limb_search_drop)) {
     SearchLimbs(masks, use, observations, options_.limb_fits, &result);
     SettleLimbsByLandmarks(masks, use, observations, &result);
@@ -449,6 +447,9 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   if (history_.size() > 4) history_.erase(history_.begin());
   iou_history_.push_back(result.mean_iou);
   if (iou_history_.size() > static_cast<std::size_t>(kIouWindow)) iou_history_.erase(iou_history_.begin());
+  // The accepted frame's residual, as its state file records it (Resume).
+  contour_history_.push_back(result.fit.mean_contour_px);
+  if (contour_history_.size() > static_cast<std::size_t>(kIouWindow)) contour_history_.erase(contour_history_.begin());
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   return result;
