@@ -24,6 +24,12 @@ namespace {
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
+// Appends `value` to `window`, dropping its oldest values beyond `size`.
+void AppendToWindow(std::vector<double>* window, double value, int size) {
+  window->push_back(value);
+  if (window->size() > static_cast<std::size_t>(size)) window->erase(window->begin());
+}
+
 Matrix3d RotationOf(const Vector3d& aa) {
   const double angle = aa.norm();
   if (angle < 1e-15) return Matrix3d::Identity();
@@ -445,11 +451,9 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   }
   history_.push_back(result.pose);
   if (history_.size() > 4) history_.erase(history_.begin());
-  iou_history_.push_back(result.mean_iou);
-  if (iou_history_.size() > static_cast<std::size_t>(kIouWindow)) iou_history_.erase(iou_history_.begin());
-  // The accepted frame's residual, as its state file records it (Resume).
-  contour_history_.push_back(result.fit.mean_contour_px);
-  if (contour_history_.size() > static_cast<std::size_t>(kIouWindow)) contour_history_.erase(contour_history_.begin());
+  // The accepted frame's overlap and residual, as its state file records them (Resume).
+  AppendToWindow(&iou_history_, result.mean_iou, kIouWindow);
+  AppendToWindow(&contour_history_, result.fit.mean_contour_px, kIouWindow);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   return result;
