@@ -180,19 +180,20 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
       continue;
     }
     if (!tracker.initialized() && frame > 0 && TrackedFrameFinished(inputs.folder, frame - 1)) {
-      // Continue from the saved state of the frames just before (a resumed run or a shard boundary).
-      std::vector<TemplatePose> poses;
-      std::vector<double> ious, contours;
+      // Continue from the saved state of the frames just before (a resumed run or a shard
+      // boundary): as far back as the tracker's windows reach past repeated frames.
+      std::vector<TrackedFrame> before;
       BodyShape saved_shape;
-      for (int back = std::max(0, frame - Tracker::kIouWindow); back < frame; ++back) {
+      int kept = 0;
+      for (int back = frame - 1; back >= 0 && kept < Tracker::kIouWindow; --back) {
         if (!TrackedFrameFinished(inputs.folder, back)) continue;
-        const PosesFile state = read_state(back);
-        saved_shape = state.shape;
-        if (back >= frame - 4) poses.push_back(state.frames[0].pose);
-        ious.push_back(state.frames[0].mean_iou);
-        contours.push_back(state.frames[0].fit.mean_contour_px);
+        PosesFile state = read_state(back);
+        if (before.empty()) saved_shape = state.shape;
+        const std::vector<std::string>& flags = state.frames[0].flags;
+        kept += std::find(flags.begin(), flags.end(), "duplicate") == flags.end();
+        before.insert(before.begin(), std::move(state.frames[0]));
       }
-      tracker.Resume(saved_shape, poses, ious, contours);
+      tracker.ResumeAfter(saved_shape, before, TrackingMasks(inputs, frame - 1));
     }
     const std::vector<Image> masks = TrackingMasks(inputs, frame);
     const double frame_start = NowSeconds();

@@ -374,6 +374,21 @@ void Tracker::Resume(const BodyShape& shape, const std::vector<TemplatePose>& re
   initialized_ = true;
 }
 
+void Tracker::ResumeAfter(const BodyShape& shape, const std::vector<TrackedFrame>& before,
+                          const std::vector<Image>& last_masks) {
+  std::vector<TemplatePose> poses;
+  std::vector<double> ious, contours;
+  for (const TrackedFrame& f : before) {
+    if (std::find(f.flags.begin(), f.flags.end(), "duplicate") != f.flags.end()) continue;
+    poses.push_back(f.pose);
+    AppendToWindow(&ious, f.mean_iou, kIouWindow);
+    AppendToWindow(&contours, f.fit.mean_contour_px, kIouWindow);
+  }
+  if (poses.empty()) throw std::invalid_argument("Tracker::ResumeAfter: no tracked frame before");
+  Resume(shape, poses, ious, contours);
+  for (const Image& m : last_masks) last_mask_hashes_.push_back(HashMask(m));
+}
+
 TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   if (!initialized_) return Initialize(frame, masks);
   const auto start = std::chrono::steady_clock::now();
@@ -389,7 +404,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
     result.flags.push_back("duplicate");
     Evaluate(shape_, masks, use, &result);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+    result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     return result;
   }
   last_mask_hashes_ = hashes;

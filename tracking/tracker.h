@@ -129,6 +129,11 @@ class Tracker {
   // mean IoUs and mean contour residuals (the last kIouWindow), oldest first.
   void Resume(const BodyShape& shape, const std::vector<TemplatePose>& recent_poses, const std::vector<double>& recent_ious,
               const std::vector<double>& recent_contour_px);
+  // The same from the frames tracked before, oldest first, as their state files hold them: a frame
+  // flagged "duplicate" is skipped, as Track skipped it, and `last_masks` (the previous frame's;
+  // may be empty) let a repeat of them be recognised as in the uninterrupted run. Needs the last
+  // kIouWindow frames that are not duplicates (fewer only from the start of the sequence).
+  void ResumeAfter(const BodyShape& shape, const std::vector<TrackedFrame>& before, const std::vector<Image>& last_masks);
 
   bool initialized() const { return initialized_; }
   const BodyTemplate& body() const { return body_; }

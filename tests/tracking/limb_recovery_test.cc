@@ -10,16 +10,10 @@
 #include "tracking/limb_hypotheses.h"
 #include "tracking/tracker.h"
 #include "tests/support/camera_ring.h"
+#include "tests/support/template_masks.h"
 
 namespace confluent {
 namespace {
-
-std::vector<Image> Masks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose, const Rig& rig) {
-  const Mesh mesh = body.PosedMesh(shape, pose);
-  std::vector<Image> masks;
-  for (const Camera& camera : rig.cameras) masks.push_back(RasterizeClosedMesh(mesh, camera));
-  return masks;
-}
 
 // The shoulder rotation that turns the generic upper arm from rest to `direction` (chest frame).
 std::array<double, 3> ArmTowards(const BodyTemplate& body, int shoulder, const Eigen::Vector3d& direction) {
@@ -63,7 +57,7 @@ TEST(LimbRecovery, ArmRaisedOverTheHeadWithinFourFramesIsFound) {
     Tracker tracker(rig, {}, options);
     double worst_after = 0.0;  // left wrist error once the arm is up (last 4 frames)
     for (int f = 0; f < static_cast<int>(truth.size()); ++f) {
-      const std::vector<Image> masks = Masks(body, shape, truth[f], rig);
+      const std::vector<Image> masks = testing::TemplateMasks(body, shape, truth[f], rig);
       const TrackedFrame result = f == 0 ? tracker.Initialize(f, masks) : tracker.Track(f, masks);
       for (const std::string& flag : result.flags) flags->push_back(std::to_string(f) + ":" + flag);
       if (f >= static_cast<int>(truth.size()) - 4)
@@ -101,7 +95,7 @@ TEST(LimbRecovery, LeftRightArmSwapIsUndone) {
   swapped.dofs[kJointLeftElbow] = {1.2, 0, 0};
   swapped.dofs[kJointRightShoulder] = ArmTowards(body, kJointRightShoulder, Eigen::Vector3d(0.35, 0.0, 1.0));
   swapped.dofs[kJointRightElbow] = {0, 0, 0};
-  const std::vector<Image> masks = Masks(body, shape, truth, rig);
+  const std::vector<Image> masks = testing::TemplateMasks(body, shape, truth, rig);
   // Two frames from the swapped state (the frames before it well explained, IoU 0.95); the
   // largest error of the wrists and elbows after them.
   auto track = [&](bool limb_search) {
@@ -134,7 +128,7 @@ TEST(LimbRecovery, ArmLostWithoutAnOverlapDropIsFoundByItsContours) {
   TemplatePose folded = truth;
   folded.dofs[kJointLeftShoulder] = ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-0.2, 0.3, -1.0));
   folded.dofs[kJointLeftElbow] = {1.9, 0, 0};
-  const std::vector<Image> masks = Masks(body, shape, truth, rig);
+  const std::vector<Image> masks = testing::TemplateMasks(body, shape, truth, rig);
   auto track = [&](double contour_rise, std::string* flags) {
     TrackerOptions options;
     options.limb_search_contour_rise = contour_rise;

@@ -9,6 +9,7 @@
 #include "silhouette/overlap.h"
 #include "tracking/tracker.h"
 #include "tests/support/camera_ring.h"
+#include "tests/support/template_masks.h"
 
 namespace confluent {
 namespace {
@@ -27,15 +28,6 @@ TemplatePose TruePose() {
   pose.dofs[kJointRightHip] = {-0.1, -0.1, 0.0};
   pose.dofs[kJointHead] = {0.1, 0.0, 0.3};
   return pose;
-}
-
-// The template's own silhouettes in `pose`, one per camera.
-std::vector<Image> TemplateMasks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose,
-                                 const Rig& rig) {
-  const Mesh mesh = body.PosedMesh(shape, pose);
-  std::vector<Image> masks;
-  for (const Camera& camera : rig.cameras) masks.push_back(RasterizeClosedMesh(mesh, camera));
-  return masks;
 }
 
 // A thorough shape-and-pose fit at full mask resolution.
@@ -139,7 +131,7 @@ TEST(SilhouetteFit, RecoversKnownGirthsWithoutShrinking) {
   for (double& g : truth_shape.girth_scale) g *= 1.12;
   const Rig rig = testing::CameraRing(8, 320, 240);
   const TemplatePose truth = TruePose();
-  const std::vector<Image> masks = TemplateMasks(body, truth_shape, truth, rig);  // centre-sampled
+  const std::vector<Image> masks = testing::TemplateMasks(body, truth_shape, truth, rig);  // centre-sampled
   SilhouetteFitOptions options = FullResolutionShapeFit();
   options.shape_prior_weight = 1.0;
   options.fit_sections = false;  // girths alone: depth and taper would trade against them
@@ -178,7 +170,7 @@ TEST(SilhouetteFit, RecoversKnownCrossSections) {
   for (BodySegment s : {BodySegment::kLeftUpperArm, BodySegment::kRightUpperArm}) truth_shape.mid_bulge[int(s)] = 0.2;
   const Rig rig = testing::CameraRing(8, 320, 240);
   const TemplatePose truth = TruePose();
-  const std::vector<Image> masks = TemplateMasks(body, truth_shape, truth, rig);
+  const std::vector<Image> masks = testing::TemplateMasks(body, truth_shape, truth, rig);
   SilhouetteFitOptions options = FullResolutionShapeFit();
   options.shape_prior_weight = 1.0;
   options.section_prior_weight = 1.0;
@@ -230,7 +222,7 @@ TEST(SilhouetteFit, CrouchedFirstFrameFindsTheBodysSizeAndProportions) {
   crouch.dofs[kJointLeftShoulder] = {0.0, 0.9, 0.0};
   crouch.dofs[kJointRightShoulder] = {0.0, -0.9, 0.0};
   const Rig rig = testing::CameraRing(8, 320, 240);
-  const std::vector<Image> masks = TemplateMasks(body, truth_shape, crouch, rig);
+  const std::vector<Image> masks = testing::TemplateMasks(body, truth_shape, crouch, rig);
   const TrackerOptions tracker;
   SilhouetteFitOptions options = FullResolutionShapeFit();
   options.fit_skirt = false;
