@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "app/tracking_args.h"
 #include "app/commands.h"
 #include "app/run_output.h"
 #include "core/error.h"
@@ -35,6 +36,7 @@ int RunRun(const ParsedArgs& args, const Context& context) {
     throw UsageError("--refine-keyframes: must be within [1, 1000]");
   options.refine_photo = !args.has("no-photo-refine");
   options.landmarks = !args.has("no-landmarks");
+  options.girth_inflation = GirthInflationFromArgs(args);
   options.threads = args.get_int("threads", options.threads);
   if (options.threads < 1 || options.threads > 64) throw UsageError("--threads: must be within [1, 64]");
   options.fps = args.get_double("fps", 0.0);
@@ -85,6 +87,7 @@ CommandSpec MakeRunCommand() {
       {"refine-iterations", "N", "rounds of silhouette refinement per frame (default 18)"},
       {"refine-keyframes", "N", "refine only every N-th frame from its deformation, the others from the previous frame's correction in fewer rounds (default 1)"},
       {"no-photo-refine", "", "skip the photo-consistency refinement that follows the silhouette refinement"},
+      GirthInflationOptionSpec(),
       {"no-landmarks", "", "track from the silhouettes alone, without BlazePose's body landmarks (first frame, lost limbs, every 5th frame)"},
       {"no-render", "", "skip the 3D-video render stage"},
       {"render-width", "PX", "width of the orbit video (default 960)"},

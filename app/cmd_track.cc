@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "app/tracking_args.h"
 #include "app/commands.h"
 #include "calib/capture.h"
 #include "core/error.h"
@@ -33,6 +34,7 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
   inputs.fps = RunFrameRate(capture);
   inputs.tracker.fit.downscale = args.get_int("downscale", inputs.tracker.fit.downscale);
   inputs.tracker.fit.num_threads = args.get_int("threads", inputs.tracker.fit.num_threads);
+  inputs.tracker.girth_inflation_max = GirthInflationFromArgs(args);
   inputs.tracker.Check();
   inputs.landmarks = !args.has("no-landmarks");
   TrackingReportOptions report_options;
@@ -83,6 +85,7 @@ CommandSpec MakeTrackCommand() {
       {"overlay-every", "N", "write overlays every N frames (default 25; 0 = none)"},
       {"downscale", "N", "mask reduction for fitting (default 0 = automatic, about 256 px across)"},
       {"threads", "N", "solver threads (default 2)"},
+      GirthInflationOptionSpec(),
       {"no-landmarks", "", "do not ask BlazePose's landmarks where a limb is ambiguous (first frame, lost limbs, every 5th frame)"},
   };
   spec.run = RunTrack;

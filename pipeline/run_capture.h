@@ -28,6 +28,7 @@ struct RunOptions {
   int refine_keyframes = 1;            // RunInputs::refine_keyframes
   bool refine_photo = true;
   bool landmarks = true;               // RunInputs::landmarks
+  double girth_inflation = 0.0;        // TrackerOptions::girth_inflation_max
   bool render = true;                  // the orbit 3D video
   RenderStageOptions render_options;
   int threads = 2;

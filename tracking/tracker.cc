@@ -41,6 +41,14 @@ Vector3d RotationVector(const Matrix3d& R) {
   return aa.angle() * aa.axis();
 }
 
+// `shape` with every girth and the skirt's flare grown by `fraction`.
+BodyShape InflatedGirths(const BodyShape& shape, double fraction) {
+  BodyShape inflated = shape;
+  for (double& girth : inflated.girth_scale) girth *= 1.0 + fraction;
+  inflated.skirt_flare_m *= 1.0 + fraction;
+  return inflated;
+}
+
 std::size_t HashMask(const Image& mask) {
   return std::hash<std::string_view>()(std::string_view(reinterpret_cast<const char*>(mask.data.data()), mask.data.size()));
 }
@@ -117,6 +125,11 @@ void TrackerOptions::Check() const {
                 "in [0, 1)");
   RequireOption(skirt_try_below_iou >= 0 && skirt_try_below_iou <= 1, owner + "skirt_try_below_iou",
                 skirt_try_below_iou, "in [0, 1]");
+  RequireOption(girth_inflation_max >= 0 && girth_inflation_max <= 0.5, owner + "girth_inflation_max",
+                girth_inflation_max, "in [0, 0.5]");
+  RequireOption(girth_inflation_step > 0 && girth_inflation_step <= 0.5, owner + "girth_inflation_step",
+                girth_inflation_step, "in (0, 0.5]");
+  RequireOption(girth_inflation_min_gain >= 0, owner + "girth_inflation_min_gain", girth_inflation_min_gain, ">= 0");
   RequireOption(velocity_damping >= 0 && velocity_damping <= 1.5, owner + "velocity_damping", velocity_damping,
                 "in [0, 1.5]");
   RequireOption(bad_frame_iou >= 0 && bad_frame_iou <= 1, owner + "bad_frame_iou", bad_frame_iou, "in [0, 1]");
@@ -266,6 +279,26 @@ void Tracker::Evaluate(const BodyShape& shape, const std::vector<Image>& masks, 
   result->joints = body_.JointPositions(shape_, result->pose);
 }
 
+void Tracker::InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result) {
+  if (options_.girth_inflation_max <= 0.0) return;
+  TrackedFrame best = *result;
+  double best_fraction = 0.0;
+  const int steps = static_cast<int>(std::floor(options_.girth_inflation_max / options_.girth_inflation_step + 1e-9));
+  for (int k = 1; k <= steps; ++k) {
+    const double fraction = k * options_.girth_inflation_step;
+    TrackedFrame candidate = *result;
+    Evaluate(InflatedGirths(shape_, fraction), masks, use, &candidate);
+    if (candidate.mean_iou > best.mean_iou) {
+      best = std::move(candidate);
+      best_fraction = fraction;
+    }
+  }
+  if (best_fraction == 0.0 || best.mean_iou < result->mean_iou + options_.girth_inflation_min_gain) return;
+  shape_ = InflatedGirths(shape_, best_fraction);
+  best.flags.push_back("girths:+" + std::to_string(static_cast<int>(std::lround(100 * best_fraction))) + "%");
+  *result = std::move(best);
+}
+
 TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
@@ -352,6 +385,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   }
   if (options_.limb_search) SearchLimbs(masks, use, observations, options_.limb_fits_init, &result);
   SettleLimbsByLandmarks(masks, use, observations, &result);
+  InflateGirths(masks, use, &result);
   result.flags.push_back("initialized");
   initialized_ = true;
   history_.push_back(result.pose);

@@ -46,6 +46,14 @@ struct TrackerOptions {
   bool try_skirt = true;           // initial shape fit also from a long skirt (BodyShape::skirt_*) ...
   double skirt_try_below_iou = 0.92; // ... when the fit without one has a mean IoU below this (1: always) ...
   double skirt_min_iou_gain = 0.01; // ... kept when its mean IoU beats the fit without by this much
+  // After the initial fit, every girth (and the skirt's flare) is tried grown by up to this
+  // fraction in steps of girth_inflation_step, kept at the step that overlaps the tracking cameras
+  // best when that beats the fit by girth_inflation_min_gain (0: never). The fit keeps the
+  // template inside the silhouettes, so loose clothes and cameras that disagree by a few pixels
+  // leave it thin (the Tsinghua dancer: 3-4 px inside the masks all round).
+  double girth_inflation_max = 0.0;
+  double girth_inflation_step = 0.02;
+  double girth_inflation_min_gain = 0.003;
   double velocity_damping = 0.7;   // fraction of the last frame's velocity used for the prediction
   double bad_frame_iou = 0.7;      // mean IoU below this triggers a recovery
   double bad_frame_iou_drop = 0.1; // ... or a drop of this much below the running median
@@ -155,6 +163,8 @@ class Tracker {
   // (see TrackerOptions); nothing without a landmark source.
   void SettleLimbsByLandmarks(const std::vector<Image>& masks, const std::vector<bool>& use,
                               const SilhouetteObservations& observations, TrackedFrame* result);
+  // Grows every girth of the shape where that overlaps the masks better (TrackerOptions::girth_inflation_max).
+  void InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result);
 
   Rig rig_;
   std::vector<bool> excluded_;

@@ -19,6 +19,9 @@ TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
   tracker.velocity_damping = 2.0;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.velocity_damping = 2: must be in [0, 1.5]");
   tracker = TrackerOptions();
+  tracker.girth_inflation_max = 0.6;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.girth_inflation_max = 0.6: must be in [0, 0.5]");
+  tracker = TrackerOptions();
   tracker.fit.downscale = 17;
   testing::ExpectCheckRefuses(tracker, "SilhouetteFitOptions.downscale = 17: must be in [0, 16]");
   ScanRegistrationOptions registration;

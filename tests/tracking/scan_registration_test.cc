@@ -10,6 +10,8 @@
 #include <fstream>
 #include <set>
 
+#include <nlohmann/json.hpp>
+
 #include "core/body_segments.h"
 #include "core/error.h"
 #include "core/mesh_ops.h"

@@ -61,6 +61,11 @@ TEST(TrackCommand, TracksTheTinyStudioCapture) {
   // Unknown camera names are usage errors.
   const testing::CommandResult bad = testing::RunConfluent({"track", capture, "--masks", gt + "/masks", "--exclude-camera", "nope", "--out", dir / "run2"});
   EXPECT_NE(bad.exit_code, 0);
+  // So is a girth inflation out of range, named.
+  const testing::CommandResult fat = testing::RunConfluent(
+      {"track", capture, "--masks", gt + "/masks", "--girth-inflation", "0.7", "--out", dir / "run3"});
+  EXPECT_NE(fat.exit_code, 0);
+  EXPECT_NE(fat.stderr_text.find("--girth-inflation: must be within [0, 0.5]"), std::string::npos) << fat.stderr_text;
 }
 
 }  // namespace
