@@ -224,7 +224,7 @@ def run_capture(cap, i, n, args, build, preset_dir, synth_help):
             log(f"{tag} synth: reusing {capture}")
         # 2. The run with the held-out cameras excluded (resumes by itself).
         excluded = [a for c in HELD_OUT for a in ("--exclude-camera", c)]
-        step(tag, "run", [exe, "run", capture, "--out", run] + excluded + threads, logfile)
+        step(tag, "run", [exe, "run", capture, "--out", run] + excluded + threads + args.run_option, logfile)
         # 3. Held-out evaluation against the ground truth; a side-by-side picture of every frame,
         #    so that the worst frames have one.
         step(tag, "evaluate", [exe, "evaluate", capture, "--run", run, "--masks", os.path.join(truth, "masks"),
@@ -318,6 +318,8 @@ def main():
     parser.add_argument("--check", action="store_true",
                         help="exit 1 when a metric is below its floor; without --only, only the captures the floors file names")
     parser.add_argument("--keep", action="store_true", help="reuse finished captures and runs")
+    parser.add_argument("--run-option", action="append", default=[], metavar="OPTION",
+                        help="passed to every `confluent run` (repeatable; e.g. --run-option=--girth-inflation=0.1)")
     args = parser.parse_args()
 
     work = os.path.abspath(args.out)
