@@ -189,10 +189,10 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
         if (!TrackedFrameFinished(inputs.folder, back)) continue;
         PosesFile state = read_state(back);
         if (before.empty()) saved_shape = state.shape;
-        const std::vector<std::string>& flags = state.frames[0].flags;
-        kept += std::find(flags.begin(), flags.end(), "duplicate") == flags.end();
-        before.insert(before.begin(), std::move(state.frames[0]));
+        kept += !IsRepeatedFrame(state.frames[0]);
+        before.push_back(std::move(state.frames[0]));
       }
+      std::reverse(before.begin(), before.end());  // oldest first
       tracker.ResumeAfter(saved_shape, before, TrackingMasks(inputs, frame - 1));
     }
     const std::vector<Image> masks = TrackingMasks(inputs, frame);

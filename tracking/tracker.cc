@@ -49,6 +49,8 @@ BodyShape InflatedGirths(const BodyShape& shape, double fraction) {
   return inflated;
 }
 
+constexpr const char* kRepeatedFrameFlag = "duplicate";
+
 std::size_t HashMask(const Image& mask) {
   return std::hash<std::string_view>()(std::string_view(reinterpret_cast<const char*>(mask.data.data()), mask.data.size()));
 }
@@ -408,12 +410,16 @@ void Tracker::Resume(const BodyShape& shape, const std::vector<TemplatePose>& re
   initialized_ = true;
 }
 
+bool IsRepeatedFrame(const TrackedFrame& frame) {
+  return std::find(frame.flags.begin(), frame.flags.end(), kRepeatedFrameFlag) != frame.flags.end();
+}
+
 void Tracker::ResumeAfter(const BodyShape& shape, const std::vector<TrackedFrame>& before,
                           const std::vector<Image>& last_masks) {
   std::vector<TemplatePose> poses;
   std::vector<double> ious, contours;
   for (const TrackedFrame& f : before) {
-    if (std::find(f.flags.begin(), f.flags.end(), "duplicate") != f.flags.end()) continue;
+    if (IsRepeatedFrame(f)) continue;
     poses.push_back(f.pose);
     AppendToWindow(&ious, f.mean_iou, kIouWindow);
     AppendToWindow(&contours, f.fit.mean_contour_px, kIouWindow);
@@ -435,7 +441,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   for (const Image& m : masks) hashes.push_back(HashMask(m));
   if (hashes == last_mask_hashes_) {
     result.pose = history_.back();
-    result.flags.push_back("duplicate");
+    result.flags.push_back(kRepeatedFrameFlag);
     Evaluate(shape_, masks, use, &result);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;

@@ -110,6 +110,10 @@ struct TrackedFrame {
   double cpu_seconds = 0.0;              // process CPU time of the frame (all threads)
 };
 
+// Whether `frame` repeated the masks of the one before (flag "duplicate"): Track kept the pose and
+// left it out of the history and the lost-limb windows.
+bool IsRepeatedFrame(const TrackedFrame& frame);
+
 // Frame-by-frame tracker; holds the shape and the pose history.
 class Tracker {
  public:
