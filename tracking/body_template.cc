@@ -135,11 +135,14 @@ BodyTemplate::BodyTemplate(int longitudes) {
     const double phi = 0.5 * M_PI * i / cap_rings;
     rings.push_back({1.0, std::cos(phi), std::sin(phi)});
   }
+  // The fit measures the analytic ellipses; each ring is drawn as the polygon of the same area
+  // (not the inscribed one, 4.5% smaller at 12 longitudes), so the mesh is as wide as the fit.
+  const double equal_area = std::sqrt(2.0 * M_PI / (longitudes * std::sin(2.0 * M_PI / longitudes)));
   mesh_coords_.push_back({0.0, -1.0, 0.0, 0.0});
   for (const Ring& ring : rings)
     for (int k = 0; k < longitudes; ++k) {
-      const double theta = 2.0 * M_PI * k / longitudes;
-      mesh_coords_.push_back({ring.s, ring.c, ring.rho * std::cos(theta), ring.rho * std::sin(theta)});
+      const double theta = 2.0 * M_PI * k / longitudes, rho = equal_area * ring.rho;
+      mesh_coords_.push_back({ring.s, ring.c, rho * std::cos(theta), rho * std::sin(theta)});
     }
   mesh_coords_.push_back({1.0, 1.0, 0.0, 0.0});
   const int num_rings = static_cast<int>(rings.size());

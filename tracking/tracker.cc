@@ -123,6 +123,7 @@ void TrackerOptions::Check() const {
   fit.Check();
   const std::string owner = "TrackerOptions.";
   RequireOption(init_rounds >= 1, owner + "init_rounds", init_rounds, ">= 1");
+  RequireOption(init_max_iterations >= 1, owner + "init_max_iterations", init_max_iterations, ">= 1");
   RequireOption(skirt_min_iou_gain >= 0 && skirt_min_iou_gain < 1, owner + "skirt_min_iou_gain", skirt_min_iou_gain,
                 "in [0, 1)");
   RequireOption(skirt_try_below_iou >= 0 && skirt_try_below_iou <= 1, owner + "skirt_try_below_iou",
@@ -345,7 +346,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   SilhouetteFitOptions shape_options = options_.fit;
   shape_options.fit_shape = true;
   shape_options.rounds = options_.init_rounds;
-  shape_options.max_iterations = 25;
+  shape_options.max_iterations = options_.init_max_iterations;
   shape_options.prior_weight = 0.2;
   shape_options.shape_prior_weight = options_.init_shape_prior_weight;
   shape_options.shape_proportion_weight = options_.init_shape_proportion_weight;

@@ -36,7 +36,10 @@ HullPlacement EstimatePlacementFromHull(const Rig& rig, const std::vector<Image>
 // Options of the Tracker.
 struct TrackerOptions {
   SilhouetteFitOptions fit;        // per-frame fit
-  int init_rounds = 3;             // contour rounds of the initial shape-and-pose fit
+  int init_rounds = 3;             // contour rounds of the initial shape-and-pose fit ...
+  // ... and Levenberg-Marquardt iterations per round (at 25 a crouched first frame's first round
+  // stopped early and the next rounds' contours settled on thighs 20% short)
+  int init_max_iterations = 40;
   // Shape priors of the initial fit (SilhouetteFitOptions): a weak pull towards the hull's
   // height (a crouched first frame under-estimates it) and a strong one towards human
   // proportions (at 40, arms hanging against the thighs came out 10-18% short: the modern dance's

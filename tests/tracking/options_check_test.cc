@@ -16,6 +16,9 @@ TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
   tracker.init_rounds = 0;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.init_rounds = 0: must be >= 1");
   tracker = TrackerOptions();
+  tracker.init_max_iterations = 0;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.init_max_iterations = 0: must be >= 1");
+  tracker = TrackerOptions();
   tracker.velocity_damping = 2.0;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.velocity_damping = 2: must be in [0, 1.5]");
   tracker = TrackerOptions();

@@ -227,6 +227,8 @@ TEST(SilhouetteFit, CrouchedFirstFrameFindsTheBodysSizeAndProportions) {
   SilhouetteFitOptions options = FullResolutionShapeFit();
   options.fit_skirt = false;
   options.prior_weight = 0.2;
+  options.rounds = tracker.init_rounds;  // the tracker's initial fit
+  options.max_iterations = tracker.init_max_iterations;
   const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
   auto fit = [&](double prior_weight, double proportion_weight) {
     SilhouetteFitOptions o = options;
