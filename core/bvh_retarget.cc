@@ -338,32 +338,50 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
   const double tiny = 1e-6 * std::max(result.bvh_height, 1e-12);
   std::vector<Matrix3d> align(nt, Matrix3d::Identity());
   std::vector<Matrix3d> reference_world(nt, Matrix3d::Identity());  // target joints in the reference pose
-  std::vector<std::vector<int>> used_children(nt);
+  // The BVH joint that gives a mapped child's direction: the child itself, or, when it lies on
+  // its parent (CMU's LeftFingerBase, an offset of zero), its first descendant that does not.
+  std::vector<int> bvh_first_child(bvh.size(), -1);
+  for (int c = bvh.size() - 1; c > 0; --c)
+    if (bvh.joints[c].parent >= 0) bvh_first_child[bvh.joints[c].parent] = c;
+  auto direction_joint = [&](int b, int c) {
+    while (c >= 0 && (bvh_rest[c] - bvh_rest[b]).norm() < tiny) c = bvh_first_child[c];
+    return c;
+  };
+  std::vector<std::vector<int>> used_children(nt);  // BVH joints giving each target joint's child directions
   std::vector<std::vector<Vector3d>> local_child(nt);
   for (int j = 0; j < nt; ++j) {
     const int b = map_index[j];
-    if (j > 0) reference_world[j] = reference_world[target.joints[j].parent];
+    const int parent = target.joints[j].parent;
+    if (j > 0) reference_world[j] = reference_world[parent];
     if (b < 0) continue;
     const Matrix3d reference_rotation = m * reference[b].linear() * m.transpose();
     std::vector<Vector3d> from, to;
     for (int c : children[j]) {
       if (map_index[c] < 0) continue;
-      const Vector3d d = m * (bvh_rest[map_index[c]] - bvh_rest[b]);
+      const int d_joint = direction_joint(b, map_index[c]);
+      if (d_joint < 0) continue;
+      const Vector3d d = m * (bvh_rest[d_joint] - bvh_rest[b]);
       const Vector3d t = target_rest[c] - target_rest[j];
-      if (d.norm() < tiny || t.norm() < 1e-9) continue;
+      if (t.norm() < 1e-9) continue;
       from.push_back(t.normalized());
       to.push_back(d.normalized());
-      used_children[j].push_back(c);
+      used_children[j].push_back(d_joint);
       local_child[j].push_back(reference_rotation.transpose() * d);
     }
     // A mapped joint without a mapped child (a head over a neck that leans, as CMU's ASF necks
     // do; a spine below an unmapped chest) takes the pelvis's orientation in the reference pose
-    // (the body's heading), rather than its parent's tilt. A joint with one child keeps its
+    // (the body's heading), rather than its parent's tilt; a limb's (a wrist over an End Site of
+    // length zero, as in Bandai Namco's files) its parent's, so that the hand continues the
+    // forearm as at the target's rest (with the pelvis's, the hands came out bent by the angle
+    // between the two rest poses' arms, 50 degrees and more). A joint with one child keeps its
     // parent's twist: turned only as far as its bone needs (CMU's subject 94 stands at rest
     // facing away from its first frame; without the parent's twist every single-child joint
     // came out turned half round about its bone against its parent: a spine twisted by 180
     // degrees, the head facing backwards).
-    reference_world[j] = from.empty() ? reference_world[0] : BestRotation(from, to, reference_world[j]);
+    const std::string& name = target.joints[j].name;
+    const bool limb = name.rfind("left_", 0) == 0 || name.rfind("right_", 0) == 0;
+    if (from.empty()) reference_world[j] = limb && parent >= 0 ? reference_world[parent] : reference_world[0];
+    else reference_world[j] = BestRotation(from, to, reference_world[j]);
     align[j] = reference_rotation.transpose() * reference_world[j];
   }
 
@@ -385,7 +403,7 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
         std::vector<Vector3d> predicted, actual;
         for (std::size_t k = 0; k < used_children[j].size(); ++k) {
           const int c = used_children[j][k];
-          const Vector3d a = m * (bvh_world[map_index[c]].translation() - bvh_world[b].translation());
+          const Vector3d a = m * (bvh_world[c].translation() - bvh_world[b].translation());
           if (a.norm() < tiny) continue;
           predicted.push_back((g * local_child[j][k]).normalized());
           actual.push_back(a.normalized());

@@ -141,6 +141,34 @@ TEST(BvhRetarget, BonesPointWhereTheBvhBonesPointWithTheirTwist) {
   EXPECT_NEAR(low, 0.02, 1e-12);
 }
 
+// A hand whose End Site lies on the wrist (Bandai Namco's files) gives no direction: the target's
+// hand continues its forearm, turned only by the BVH's wrist rotation. (It kept the pelvis's
+// orientation of the BVH's T-pose: bent by the 50 degrees between the T- and the A-pose arm.)
+TEST(BvhRetarget, HandWithoutADirectionContinuesTheForearm) {
+  testing::TempDir dir;
+  std::ofstream(dir / "m.bvh") << SyntheticBvh(TestFrames(), {}, 0.0);
+  const BvhMotion motion = ReadBvh(dir / "m.bvh");
+  const Skeleton target = StudioLikeSkeleton();
+  const BvhRetargetResult result = RetargetBvh(motion, target, {}, dir / "m.bvh");
+  for (std::size_t f = 0; f < result.poses.size(); ++f) {
+    const auto p = JointPositions(target, result.poses[f]);
+    for (const char* side : {"left", "right"}) {
+      const std::string s(side);
+      const Vector3d forearm = p[target.IndexOf(s + "_wrist")] - p[target.IndexOf(s + "_elbow")];
+      const Vector3d hand = p[target.IndexOf(s + "_hand_end")] - p[target.IndexOf(s + "_wrist")];
+      EXPECT_GT(forearm.normalized().dot(hand.normalized()), 1 - 1e-9) << "frame " << f << " " << side;
+    }
+  }
+  // A wrist rotation of the BVH bends the hand by as much.
+  std::ofstream(dir / "bent.bvh") << SyntheticBvh({Frame({0, 0, 0}, {}), Frame({0, 0, 0}, {{kLHand, {30, 0, 0}}})}, {}, 0.0);
+  const BvhMotion bent_motion = ReadBvh(dir / "bent.bvh");
+  const BvhRetargetResult bent = RetargetBvh(bent_motion, target, {}, dir / "bent.bvh");
+  const auto p = JointPositions(target, bent.poses[1]);
+  const Vector3d forearm = p[target.IndexOf("left_wrist")] - p[target.IndexOf("left_elbow")];
+  const Vector3d hand = p[target.IndexOf("left_hand_end")] - p[target.IndexOf("left_wrist")];
+  EXPECT_NEAR(std::acos(forearm.normalized().dot(hand.normalized())), 30 * M_PI / 180, 1e-6);
+}
+
 TEST(BvhRetarget, SamplePosesInterpolates) {
   Pose a = Pose::Rest(2), b = Pose::Rest(2);
   b.root_translation = Vector3d(1, 2, 3);

@@ -2,8 +2,8 @@
 // studio actor as `synth --bvh` performs them: each source skeleton (CMU, SFU, Bandai Namco,
 // Perfume, three.js, a Z-up file without a head joint) gives an actor of the right height,
 // upright at the first frame with the shoulders square to the hips, whose every segment moves,
-// whose trunk and neck never twist half round about their bones, and whose pelvis stays in the
-// capture volume.
+// whose trunk and neck never twist half round about their bones, whose hands bend at the wrists
+// as the BVH's do, and whose pelvis stays in the capture volume.
 
 #include <gtest/gtest.h>
 
@@ -101,6 +101,64 @@ TEST_P(BvhSuiteClip, ActorIsUprightOfItsHeightMovesEverySegmentAndStaysInView) {
   EXPECT_GT(least_turn, 3.0);
   EXPECT_LE(farthest, volume + 1e-9);
   EXPECT_LT(largest_bone_twist, 90.0);  // a neck turns about 80 degrees at most
+}
+
+double BendDeg(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+  return std::acos(std::clamp((b - a).normalized().dot((c - b).normalized()), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+// The hands bend at the wrists as the BVH's hands do: the angle between forearm and hand, frame by
+// frame, against the BVH's own (its mapped elbow, wrist and the first joint past the wrist that
+// does not lie on it: CMU's finger base has an offset of zero). A BVH whose hand ends where it
+// starts (Bandai Namco's End Sites) says nothing of the hand's direction: the hand then continues
+// the forearm, turned only by the BVH's wrist rotation (its bend at most that rotation's angle). Before, such hands (and CMU's) kept the
+// pelvis's orientation at the reference pose: bent by 50 degrees in every frame, or folded back
+// onto the forearm (Bandai Namco's, 154 to 180 degrees).
+TEST_P(BvhSuiteClip, HandsBendAsTheBvhHandsBend) {
+  const std::string path = testing::SharedDataPath(std::string("bvh/suite/") + GetParam().file);
+  if (path.empty()) GTEST_SKIP() << "shared data bvh/suite/" << GetParam().file << " not available";
+  const Skeleton skeleton = MakeStudioSkeleton(StudioActorOptions());
+  const BvhMotion motion = ReadBvh(path);
+  const BvhRetargetResult result = RetargetBvh(motion, skeleton, {}, path);
+  const Skeleton& bvh = motion.skeleton;
+  std::vector<int> first_child(bvh.size(), -1);
+  for (int j = bvh.size() - 1; j > 0; --j) first_child[bvh.joints[j].parent] = j;
+  const std::vector<Vector3d> bvh_rest = bvh.RestPositions();
+  for (const char* side : {"left", "right"}) {
+    const std::string s(side);
+    const int wrist = skeleton.IndexOf(s + "_wrist"), elbow = skeleton.IndexOf(s + "_elbow");
+    const int hand_end = skeleton.IndexOf(s + "_hand_end");
+    const int b_wrist = bvh.IndexOf(result.joint_map.at(s + "_wrist")), b_elbow = bvh.IndexOf(result.joint_map.at(s + "_elbow"));
+    int b_hand = result.joint_map.count(s + "_hand_end") ? bvh.IndexOf(result.joint_map.at(s + "_hand_end")) : first_child[b_wrist];
+    while (b_hand >= 0 && (bvh_rest[b_hand] - bvh_rest[b_wrist]).norm() < 1e-6) b_hand = first_child[b_hand];
+    // Without a direction: the wrist's rotation against the elbow's, relative to the reference
+    // pose's, bounds the bend (a hand in line with the forearm there).
+    const Pose reference = result.reference_frame >= 0 ? motion.frames[result.reference_frame] : Pose::Rest(bvh.size());
+    auto wrist_in_elbow = [&](const Pose& pose) {
+      const auto world = WorldFromJoint(bvh, pose);
+      return Eigen::Matrix3d(world[b_elbow].linear().transpose() * world[b_wrist].linear());
+    };
+    const Eigen::Matrix3d reference_wrist = wrist_in_elbow(reference);
+    double worst_difference = 0.0, largest = 0.0;
+    for (std::size_t f = 0; f < motion.frames.size(); f += 5) {
+      const std::vector<Vector3d> p = JointPositions(skeleton, result.poses[f]);
+      const double bend = BendDeg(p[elbow], p[wrist], p[hand_end]);
+      largest = std::max(largest, bend);
+      double difference = 0.0;
+      if (b_hand >= 0) {
+        const std::vector<Vector3d> q = JointPositions(bvh, motion.frames[f]);
+        difference = std::abs(bend - BendDeg(q[b_elbow], q[b_wrist], q[b_hand]));
+      } else {
+        const double turn = Eigen::AngleAxisd(reference_wrist.transpose() * wrist_in_elbow(motion.frames[f])).angle();
+        difference = std::max(0.0, bend - turn * 180.0 / M_PI);
+      }
+      worst_difference = std::max(worst_difference, difference);
+    }
+    std::printf("%-34s %-5s hand %s: wrist bend up to %.0f deg, %.1f deg past the BVH's at worst\n", GetParam().file,
+                side, b_hand < 0 ? "without a direction in the BVH" : bvh.joints[b_hand].name.c_str(), largest,
+                worst_difference);
+    EXPECT_LT(worst_difference, 3.0) << side;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(

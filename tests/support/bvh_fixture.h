@@ -13,8 +13,10 @@ namespace confluent::testing::bvh_fixture {
 using Eigen::Vector3d;
 
 // A CMU-named, Y-up, centimetre BVH in a T-pose facing +z (its left is +x). `names` may rename
-// joints (for the unmappable case).
-inline std::string SyntheticBvh(const std::vector<std::string>& frames, const std::map<std::string, std::string>& rename = {}) {
+// joints (for the unmappable case); `hand_cm` is the length of the hands' End Sites (0: a hand
+// that ends where it starts, as in Bandai Namco's files).
+inline std::string SyntheticBvh(const std::vector<std::string>& frames, const std::map<std::string, std::string>& rename = {},
+                                double hand_cm = 18) {
   auto n = [&](const std::string& name) {
     const auto it = rename.find(name);
     return it == rename.end() ? name : it->second;
@@ -49,7 +51,7 @@ inline std::string SyntheticBvh(const std::vector<std::string>& frames, const st
     joint(side + "Arm", {sx * 18, 14, 0});
     joint(side + "ForeArm", {sx * 28, 0, 0});
     joint(side + "Hand", {sx * 25, 0, 0});
-    end({sx * 18, 0, 0});
+    end({sx * hand_cm, 0, 0});
     s << "}\n}\n}\n";
   }
   s << "}\n}\n}\nMOTION\nFrames: " << frames.size() << "\nFrame Time: 0.02\n";
