@@ -103,6 +103,7 @@ TEST_P(BvhSuiteClip, ActorIsUprightOfItsHeightMovesEverySegmentAndStaysInView) {
   EXPECT_LT(largest_bone_twist, 90.0);  // a neck turns about 80 degrees at most
 }
 
+// The bend at b of the chain a -> b -> c.
 double BendDeg(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
   return std::acos(std::clamp((b - a).normalized().dot((c - b).normalized()), -1.0, 1.0)) * 180.0 / M_PI;
 }
@@ -111,9 +112,9 @@ double BendDeg(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
 // frame, against the BVH's own (its mapped elbow, wrist and the first joint past the wrist that
 // does not lie on it: CMU's finger base has an offset of zero). A BVH whose hand ends where it
 // starts (Bandai Namco's End Sites) says nothing of the hand's direction: the hand then continues
-// the forearm, turned only by the BVH's wrist rotation (its bend at most that rotation's angle). Before, such hands (and CMU's) kept the
-// pelvis's orientation at the reference pose: bent by 50 degrees in every frame, or folded back
-// onto the forearm (Bandai Namco's, 154 to 180 degrees).
+// the forearm, turned only by the BVH's wrist rotation (its bend at most that rotation's angle).
+// Before, such hands (and CMU's) kept the pelvis's orientation at the reference pose: bent by 50
+// degrees in every frame, or folded back onto the forearm (Bandai Namco's, 154 to 180 degrees).
 TEST_P(BvhSuiteClip, HandsBendAsTheBvhHandsBend) {
   const std::string path = testing::SharedDataPath(std::string("bvh/suite/") + GetParam().file);
   if (path.empty()) GTEST_SKIP() << "shared data bvh/suite/" << GetParam().file << " not available";
@@ -124,6 +125,7 @@ TEST_P(BvhSuiteClip, HandsBendAsTheBvhHandsBend) {
   std::vector<int> first_child(bvh.size(), -1);
   for (int j = bvh.size() - 1; j > 0; --j) first_child[bvh.joints[j].parent] = j;
   const std::vector<Vector3d> bvh_rest = bvh.RestPositions();
+  const Pose reference = result.reference_frame >= 0 ? motion.frames[result.reference_frame] : Pose::Rest(bvh.size());
   for (const char* side : {"left", "right"}) {
     const std::string s(side);
     const int wrist = skeleton.IndexOf(s + "_wrist"), elbow = skeleton.IndexOf(s + "_elbow");
@@ -133,7 +135,6 @@ TEST_P(BvhSuiteClip, HandsBendAsTheBvhHandsBend) {
     while (b_hand >= 0 && (bvh_rest[b_hand] - bvh_rest[b_wrist]).norm() < 1e-6) b_hand = first_child[b_hand];
     // Without a direction: the wrist's rotation against the elbow's, relative to the reference
     // pose's, bounds the bend (a hand in line with the forearm there).
-    const Pose reference = result.reference_frame >= 0 ? motion.frames[result.reference_frame] : Pose::Rest(bvh.size());
     auto wrist_in_elbow = [&](const Pose& pose) {
       const auto world = WorldFromJoint(bvh, pose);
       return Eigen::Matrix3d(world[b_elbow].linear().transpose() * world[b_wrist].linear());
