@@ -73,6 +73,10 @@ BodyTemplate::BodyTemplate(int longitudes) {
   // the parent's rest-aligned frame: x = lateral axis, y = forward axis, z = up).
   dofs_[kJointSpine] = Ball(-50, 35, -35, 35, -45, 45);
   dofs_[kJointChest] = Ball(-35, 30, -30, 30, -45, 45);
+  // The cervical spine bends at its base too: without it a head bowed or raised sits where an
+  // upright neck puts it (the head joint 2-5 cm off on performances that look up or down). No
+  // twist: the head's own turns it, and the two would trade it from frame to frame.
+  dofs_[kJointNeck] = Hinge2(Vector3d::UnitX(), -35, 35, Vector3d::UnitY(), -25, 25);
   dofs_[kJointHead] = Ball(-50, 50, -45, 45, -80, 80);
   for (int side = 0; side < 2; ++side) {
     const int shoulder = side == 0 ? kJointLeftShoulder : kJointRightShoulder;
@@ -80,7 +84,9 @@ BodyTemplate::BodyTemplate(int longitudes) {
     const Vector3d upper_dir = (r[shoulder + 1] - r[shoulder]).normalized();
     const Vector3d hinge = upper_dir.cross(Vector3d::UnitY()).normalized();  // flexion moves the forearm forwards
     dofs_[shoulder + 1] = Hinge(hinge, -5, 155);
-    dofs_[shoulder + 2] = Hinge(hinge, -75, 75);
+    // The wrist bends the hand across the forearm's plane too (radial and ulnar deviation).
+    const Vector3d deviation = hinge.cross(upper_dir).normalized();
+    dofs_[shoulder + 2] = Hinge2(hinge, -75, 75, deviation, -35, 35);
     const int hip = side == 0 ? kJointLeftHip : kJointRightHip;
     dofs_[hip] = Ball(-40, 135, -55, 55, -60, 60);
     dofs_[hip + 1] = Hinge(Vector3d::UnitX(), -160, 5);

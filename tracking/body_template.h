@@ -1,6 +1,6 @@
 #pragma once
 // The tracker's 16-segment skeletal body template (after Carranza et al. 2003): a kinematic
-// skeleton with 37 degrees of freedom and anatomical joint limits, sixteen closed tapered
+// skeleton with 41 degrees of freedom and anatomical joint limits, sixteen closed tapered
 // elliptic capsules (one per BodySegment), per-segment length and girth scales, cross-section
 // depth and taper along the bone, and a skirt
 // (the lower torso extended down and flared) for long skirts and dresses.

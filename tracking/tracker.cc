@@ -51,6 +51,21 @@ BodyShape InflatedGirths(const BodyShape& shape, double fraction) {
 
 constexpr const char* kRepeatedFrameFlag = "duplicate";
 
+// The joints of every limb that `flags` say was re-placed ("limb:NAME", "landmarks:NAME").
+std::vector<int> ReplacedLimbJoints(const std::vector<std::string>& flags) {
+  std::vector<int> joints;
+  for (Limb limb : kAllLimbs) {
+    const std::string name = LimbName(limb);
+    for (const std::string& flag : flags)
+      if (flag == "limb:" + name || flag == "landmarks:" + name) {
+        const LimbChain chain = LimbJoints(limb);
+        joints.insert(joints.end(), {chain.root, chain.middle, chain.end});
+        break;
+      }
+  }
+  return joints;
+}
+
 std::size_t HashMask(const Image& mask) {
   return std::hash<std::string_view>()(std::string_view(reinterpret_cast<const char*>(mask.data.data()), mask.data.size()));
 }
@@ -312,6 +327,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   history_.clear();
   iou_history_.clear();
   contour_history_.clear();
+  replaced_joints_.clear();
   last_mask_hashes_.clear();
   if (!placement_.ok) {
     result.flags.push_back("no_hull");
@@ -407,6 +423,7 @@ void Tracker::Resume(const BodyShape& shape, const std::vector<TemplatePose>& re
   history_.assign(recent_poses.end() - std::min<std::size_t>(recent_poses.size(), 4), recent_poses.end());
   iou_history_ = recent_ious;
   contour_history_ = recent_contour_px;
+  replaced_joints_.clear();
   last_mask_hashes_.clear();
   initialized_ = true;
 }
@@ -419,14 +436,17 @@ void Tracker::ResumeAfter(const BodyShape& shape, const std::vector<TrackedFrame
                           const std::vector<Image>& last_masks) {
   std::vector<TemplatePose> poses;
   std::vector<double> ious, contours;
+  const TrackedFrame* last = nullptr;
   for (const TrackedFrame& f : before) {
     if (IsRepeatedFrame(f)) continue;
     poses.push_back(f.pose);
     AppendToWindow(&ious, f.mean_iou, kIouWindow);
     AppendToWindow(&contours, f.fit.mean_contour_px, kIouWindow);
+    last = &f;
   }
   if (poses.empty()) throw std::invalid_argument("Tracker::ResumeAfter: no tracked frame before");
   Resume(shape, poses, ious, contours);
+  replaced_joints_ = ReplacedLimbJoints(last->flags);
   for (const Image& m : last_masks) last_mask_hashes_.push_back(HashMask(m));
 }
 
@@ -460,6 +480,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
     predicted.root_rotation = RotationVector(RotationOf(k * RotationVector(R1 * R0.transpose())) * R1);
     for (int j = 0; j < kNumTemplateJoints; ++j)
       for (int d = 0; d < 3; ++d) predicted.dofs[j][d] = last.dofs[j][d] + k * (last.dofs[j][d] - before.dofs[j][d]);
+    for (int j : replaced_joints_) predicted.dofs[j] = last.dofs[j];
     body_.ClampToLimits(&predicted);
   }
   const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);
@@ -507,6 +528,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   }
   history_.push_back(result.pose);
   if (history_.size() > 4) history_.erase(history_.begin());
+  replaced_joints_ = ReplacedLimbJoints(result.flags);
   // The accepted frame's overlap and residual, as its state file records them (Resume).
   AppendToWindow(&iou_history_, result.mean_iou, kIouWindow);
   AppendToWindow(&contour_history_, result.fit.mean_contour_px, kIouWindow);

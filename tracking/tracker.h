@@ -183,6 +183,9 @@ class Tracker {
   std::vector<TemplatePose> history_;     // accepted poses, most recent last
   std::vector<double> iou_history_;
   std::vector<double> contour_history_;
+  // Joints of the limbs that the last accepted frame re-placed (limb search, landmarks): their
+  // jump is a correction, not a motion, so the next prediction does not extrapolate it.
+  std::vector<int> replaced_joints_;
   std::vector<std::size_t> last_mask_hashes_;
   LandmarkSource landmarks_;
 };

@@ -58,9 +58,9 @@ TEST(BodyTemplate, StandsOnTheSameBodyAsTheStudioActor) {
   }
 }
 
-TEST(BodyTemplate, HasThirtySevenDofsAndTheBodysJointNames) {
+TEST(BodyTemplate, HasFortyOneDofsAndTheBodysJointNames) {
   const BodyTemplate body;
-  EXPECT_EQ(body.num_dofs(), 37);
+  EXPECT_EQ(body.num_dofs(), 41);
   ASSERT_EQ(body.joint_names().size(), static_cast<std::size_t>(kNumTemplateJoints));
   EXPECT_EQ(body.joint_names()[kJointLeftElbow], "left_elbow");
   EXPECT_EQ(body.joint_names()[kJointRightToe], "right_toe");
