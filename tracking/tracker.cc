@@ -50,6 +50,9 @@ BodyShape InflatedGirths(const BodyShape& shape, double fraction) {
 }
 
 constexpr const char* kRepeatedFrameFlag = "duplicate";
+// Flag prefixes of a limb re-placed by the limb search and by the landmarks (then the limb's name).
+constexpr const char* kLimbSearchFlag = "limb:";
+constexpr const char* kLandmarksFlag = "landmarks:";
 
 // The joints of every limb that `flags` say was re-placed ("limb:NAME", "landmarks:NAME").
 std::vector<int> ReplacedLimbJoints(const std::vector<std::string>& flags) {
@@ -57,7 +60,7 @@ std::vector<int> ReplacedLimbJoints(const std::vector<std::string>& flags) {
   for (Limb limb : kAllLimbs) {
     const std::string name = LimbName(limb);
     for (const std::string& flag : flags)
-      if (flag == "limb:" + name || flag == "landmarks:" + name) {
+      if (flag == kLimbSearchFlag + name || flag == kLandmarksFlag + name) {
         const LimbChain chain = LimbJoints(limb);
         joints.insert(joints.end(), {chain.root, chain.middle, chain.end});
         break;
@@ -230,7 +233,7 @@ void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<boo
       TrackedFrame candidate = FitLimbHypothesis(scored[k].pose, result->frame, masks, use, observations);
       if (candidate.mean_iou > result->mean_iou + options_.limb_min_gain) {
         candidate.flags = result->flags;
-        candidate.flags.push_back(std::string("limb:") + LimbName(limb));
+        candidate.flags.push_back(kLimbSearchFlag + std::string(LimbName(limb)));
         *result = std::move(candidate);
       }
     }
@@ -268,7 +271,7 @@ void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std:
     }
     if (best.joints.empty()) continue;
     best.flags = result->flags;
-    best.flags.push_back(std::string("landmarks:") + LimbName(limb));
+    best.flags.push_back(kLandmarksFlag + std::string(LimbName(limb)));
     *result = std::move(best);
   }
 }

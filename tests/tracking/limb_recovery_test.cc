@@ -29,6 +29,13 @@ double JointError(const BodyTemplate& body, const BodyShape& shape, const Templa
   return (body.JointPositions(shape, truth)[joint] - tracked.joints[joint]).norm();
 }
 
+// `pose` with the left arm folded down across the chest (seen inside the torso from the front).
+TemplatePose WithLeftArmFolded(const BodyTemplate& body, TemplatePose pose) {
+  pose.dofs[kJointLeftShoulder] = ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-0.2, 0.3, -1.0));
+  pose.dofs[kJointLeftElbow] = {1.9, 0, 0};
+  return pose;
+}
+
 // Arms beside the body; from frame 4 the left arm rises over the head within 4 frames.
 std::vector<TemplatePose> ArmRaise(const BodyTemplate& body) {
   std::vector<TemplatePose> poses;
@@ -125,9 +132,7 @@ TEST(LimbRecovery, ArmLostWithoutAnOverlapDropIsFoundByItsContours) {
   TemplatePose truth;
   truth.root_rotation = Eigen::Vector3d(0, 0, 0.3);
   truth.dofs[kJointLeftShoulder] = ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-0.1, 1.0, 0.0));  // forward
-  TemplatePose folded = truth;
-  folded.dofs[kJointLeftShoulder] = ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-0.2, 0.3, -1.0));
-  folded.dofs[kJointLeftElbow] = {1.9, 0, 0};
+  const TemplatePose folded = WithLeftArmFolded(body, truth);
   const std::vector<Image> masks = testing::TemplateMasks(body, shape, truth, rig);
   auto track = [&](double contour_rise, std::string* flags) {
     TrackerOptions options;
@@ -155,9 +160,7 @@ TEST(LimbRecovery, AReplacedArmIsNotThrownOnByTheVelocity) {
   TemplatePose raised;
   raised.root_rotation = Eigen::Vector3d(0, 0, 0.3);
   raised.dofs[kJointLeftShoulder] = ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-0.35, 0.0, 1.0));
-  TemplatePose folded = raised;
-  folded.dofs[kJointLeftShoulder] = ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-0.2, 0.3, -1.0));
-  folded.dofs[kJointLeftElbow] = {1.9, 0, 0};
+  const TemplatePose folded = WithLeftArmFolded(body, raised);
   const std::vector<Image> masks = testing::TemplateMasks(body, shape, raised, rig);
   auto track = [&](const std::vector<std::string>& flags_before) {
     TrackerOptions options;

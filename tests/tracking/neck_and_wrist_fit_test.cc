@@ -22,12 +22,6 @@ namespace {
 using Eigen::AngleAxisd;
 using Eigen::Vector3d;
 
-std::vector<Vector3d> Translations(const std::vector<Eigen::Isometry3d>& transforms) {
-  std::vector<Vector3d> out;
-  for (const auto& t : transforms) out.push_back(t.translation());
-  return out;
-}
-
 TEST(NeckAndWristFit, ABowedHeadAndAHandBentSidewaysAreFollowed) {
   StudioActorOptions actor_options;
   actor_options.target_triangles = 12000;
@@ -44,8 +38,8 @@ TEST(NeckAndWristFit, ABowedHeadAndAHandBentSidewaysAreFollowed) {
 
   const BodyTemplate body;
   const BodyShape shape = BodyShape::Uniform(actor_options.height_m);
-  const std::vector<Vector3d> joints_before = Translations(WorldFromJoint(actor.skeleton, before));
-  const std::vector<Vector3d> truth = Translations(WorldFromJoint(actor.skeleton, after));
+  const std::vector<Vector3d> joints_before = JointPositions(actor.skeleton, before);
+  const std::vector<Vector3d> truth = JointPositions(actor.skeleton, after);
   const TemplatePose start = FitPoseToJoints(body, shape, joints_before, nullptr, TemplatePose{});
 
   const Rig rig = testing::CameraRing(8, 480, 360);
