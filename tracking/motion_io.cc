@@ -105,7 +105,11 @@ PosesFile ReadPosesJson(const std::string& path, const BodyTemplate& body, const
         if (it == body.joint_names().end()) throw InputError(path, "unknown joint '" + name + "'");
         const int j = static_cast<int>(it - body.joint_names().begin());
         const auto angles = values.get<std::vector<double>>();
-        if (static_cast<int>(angles.size()) != body.dofs()[j].num_dof())
+        // Files of the 37-DOF template (before 2026-12-02) give a wrist one angle, its flexion:
+        // the same first axis, no deviation. (Their neck had no entry: upright, as it was.)
+        const bool one_axis_wrist = body.dofs()[j].type == JointType::kHinge2 && angles.size() == 1 &&
+                                    (j == kJointLeftWrist || j == kJointRightWrist);
+        if (static_cast<int>(angles.size()) != body.dofs()[j].num_dof() && !one_axis_wrist)
           throw InputError(path, "joint '" + name + "' needs " + std::to_string(body.dofs()[j].num_dof()) + " angles");
         for (std::size_t k = 0; k < angles.size(); ++k) f.pose.dofs[j][k] = angles[k];
       }

@@ -47,6 +47,42 @@ TEST(PosesJson, PerFrameFitAndTimesRoundTrip) {
   EXPECT_EQ(read.fit.seconds, frame.fit.seconds);
 }
 
+// A poses.json of the 37-DOF template (a run tracked before the neck and the wrists got their
+// second axis): one angle per wrist, no neck. It reads as the pose it was (flexion, no deviation,
+// neck upright); a joint given the wrong number of angles otherwise is refused, naming the file.
+TEST(PosesJson, FilesOfTheOneAxisWristReadAsTheyWereWritten) {
+  const BodyTemplate body;
+  TrackedFrame frame;
+  frame.pose.dofs[kJointLeftWrist] = {0.3, 0.0, 0.0};
+  frame.pose.dofs[kJointRightElbow] = {0.5, 0.0, 0.0};
+  testing::TempDir dir;
+  const std::string path = dir / "poses.json";
+  WritePosesJson(path, body, BodyShape(), {"a"}, {frame}, 25.0);
+  nlohmann::json root = nlohmann::json::parse(ReadTextFile(path));
+  nlohmann::json& angles = root["frames"][0]["joint_angles"];
+  angles["left_wrist"] = {0.3};
+  angles["right_wrist"] = {-0.2};
+  angles.erase("neck");
+  WriteTextFile(path, root.dump());
+  const PosesFile file = ReadPosesJson(path, body, {"a"});
+  ASSERT_EQ(file.frames.size(), 1u);
+  const TemplatePose& read = file.frames[0].pose;
+  EXPECT_EQ(read.dofs[kJointLeftWrist][0], 0.3);
+  EXPECT_EQ(read.dofs[kJointLeftWrist][1], 0.0);
+  EXPECT_EQ(read.dofs[kJointRightWrist][0], -0.2);
+  EXPECT_EQ(read.dofs[kJointNeck][0], 0.0);
+  EXPECT_EQ(read.dofs[kJointRightElbow][0], 0.5);
+  angles["right_elbow"] = {0.5, 0.1};
+  WriteTextFile(path, root.dump());
+  try {
+    ReadPosesJson(path, body, {"a"});
+    FAIL() << "an elbow with two angles was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("right_elbow"), std::string::npos) << e.what();
+  }
+}
+
 // The shape with its cross-sections and skirt comes back as written.
 TEST(PosesJson, ShapeWithCrossSectionsRoundTrips) {
   const BodyTemplate body;
