@@ -40,6 +40,10 @@ JointDof Hinge2(const Vector3d& a0, double lo0, double hi0, const Vector3d& a1, 
   return d;
 }
 
+// Per radian; 5 left the punch's right wrist 7.7 cm off at worst, 15 1.9 cm.
+constexpr double kWristDeviationRestWeight = 15.0;
+constexpr double kWristDeviationRestFade = 10 * kDeg;
+
 }  // namespace
 
 BodyShape BodyShape::Uniform(double height_m) {
@@ -87,6 +91,11 @@ BodyTemplate::BodyTemplate(int longitudes) {
     // The wrist bends the hand across the forearm's plane too (radial and ulnar deviation).
     const Vector3d deviation = hinge.cross(upper_dir).normalized();
     dofs_[shoulder + 2] = Hinge2(hinge, -75, 75, deviation, -35, 35);
+    // The silhouettes hardly see that bend (a hand is a few pixels wide at the fit's scale), and
+    // the fit trades it for a turned forearm (Bandai's punch: elbows 2.5-3 cm off, straight
+    // hands bent sideways). A pull towards a straight hand, with the limits kept for real bends.
+    dofs_[shoulder + 2].rest_weight[1] = kWristDeviationRestWeight;
+    dofs_[shoulder + 2].rest_fade_rad = kWristDeviationRestFade;
     const int hip = side == 0 ? kJointLeftHip : kJointRightHip;
     dofs_[hip] = Ball(-40, 135, -55, 55, -60, 60);
     dofs_[hip + 1] = Hinge(Vector3d::UnitX(), -160, 5);

@@ -40,6 +40,12 @@ struct JointDof {
   std::array<Eigen::Vector3d, 2> axes{Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY()};
   std::array<double, 3> lower{0, 0, 0};
   std::array<double, 3> upper{0, 0, 0};
+  // Pull of the silhouette fit towards the rest angle 0 (per radian; 0 = none): a DOF that the
+  // silhouettes hardly see and that is usually at rest (a hand's sideways bend).
+  std::array<double, 3> rest_weight{0, 0, 0};
+  // Angle from rest beyond which the pull fades (a Cauchy loss; 0 = a quadratic pull): a real
+  // bend is held only weakly, a small drift firmly.
+  double rest_fade_rad = 0.0;
   int num_dof() const { return type == JointType::kBall ? 3 : type == JointType::kHinge ? 1 : type == JointType::kHinge2 ? 2 : 0; }
 };
 

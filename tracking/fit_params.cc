@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <ceres/loss_function.h>
 #include <ceres/normal_prior.h>
 
 namespace confluent::tracking_internal {
@@ -148,6 +149,20 @@ void AddJointPriorAndLimits(const BodyTemplate& body, int joint, const double* p
     problem->SetParameterLowerBound(block, k, dof.lower[k]);
     problem->SetParameterUpperBound(block, k, dof.upper[k]);
   }
+}
+
+void AddJointRestPrior(const BodyTemplate& body, int joint, double scale, double* block, ceres::Problem* problem) {
+  const JointDof& dof = body.dofs()[joint];
+  const int n = dof.num_dof();
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 0; k < n; ++k) A(k, k) = dof.rest_weight[k] * scale;
+  if (A.isZero()) return;
+  ceres::LossFunction* loss = nullptr;
+  if (dof.rest_fade_rad > 0) {
+    const double max_weight = A.diagonal().maxCoeff();
+    loss = new ceres::CauchyLoss(max_weight * dof.rest_fade_rad);
+  }
+  problem->AddResidualBlock(new ceres::NormalPrior(A, Eigen::VectorXd::Zero(n)), loss, block);
 }
 
 ceres::Solver::Options TemplateFitSolverOptions(int max_iterations, int num_threads, double function_tolerance,

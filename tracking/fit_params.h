@@ -83,4 +83,8 @@ std::vector<double*> AddSegmentParameterBlocks(const BodyTemplate& body, const s
 void AddJointPriorAndLimits(const BodyTemplate& body, int joint, const double* prior_values, double prior_weight,
                             double* block, ceres::Problem* problem);
 
+// Joint `joint`'s pull towards its rest angles, JointDof::rest_weight times `scale` (nothing
+// when every weight is 0).
+void AddJointRestPrior(const BodyTemplate& body, int joint, double scale, double* block, ceres::Problem* problem);
+
 }  // namespace confluent::tracking_internal

@@ -32,6 +32,7 @@ void SilhouetteFitOptions::Check() const {
   RequireOption(image_to_model_loss_px > 0, owner + "image_to_model_loss_px", image_to_model_loss_px, "> 0");
   RequireOption(image_to_model_weight >= 0, owner + "image_to_model_weight", image_to_model_weight, ">= 0");
   RequireOption(prior_weight >= 0, owner + "prior_weight", prior_weight, ">= 0");
+  RequireOption(rest_prior_scale >= 0, owner + "rest_prior_scale", rest_prior_scale, ">= 0");
   RequireOption(shape_prior_weight >= 0, owner + "shape_prior_weight", shape_prior_weight, ">= 0");
   RequireOption(shape_proportion_weight >= 0, owner + "shape_proportion_weight", shape_proportion_weight, ">= 0");
   RequireOption(skirt_prior_weight >= 0, owner + "skirt_prior_weight", skirt_prior_weight, ">= 0");
@@ -414,6 +415,7 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
       continue;
     }
     ti::AddJointPriorAndLimits(body, j, prior.dofs[j].data(), options.prior_weight, block, &problem);
+    ti::AddJointRestPrior(body, j, options.rest_prior_scale, block, &problem);
   }
   if (!options.fit_pose) {
     problem.SetParameterBlockConstant(fp->root_t);

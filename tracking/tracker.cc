@@ -208,6 +208,7 @@ TrackedFrame Tracker::FitLimbHypothesis(const TemplatePose& hypothesis, int fram
   SilhouetteFitOptions fit = options_.fit;
   fit.prior_weight = 0.2;  // towards the hypothesis itself
   fit.coarse_to_fine = false;
+  if (!initialized_) fit.rest_prior_scale = 0.0;  // as in Initialize
   TrackedFrame candidate;
   candidate.frame = frame;
   candidate.pose = hypothesis;
@@ -326,6 +327,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   TrackedFrame result;
   result.frame = frame;
   const std::vector<bool> use = UsableCameras(masks, &result.flags);
+  initialized_ = false;
   placement_ = EstimatePlacementFromHull(rig_, masks, use);
   history_.clear();
   iou_history_.clear();
@@ -334,12 +336,16 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   last_mask_hashes_.clear();
   if (!placement_.ok) {
     result.flags.push_back("no_hull");
-    initialized_ = false;
     return result;
   }
   shape_ = BodyShape::Uniform(std::clamp(placement_.height_m, 1.0, 2.3));
   const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);
-  SilhouetteFitOptions hypothesis_options = options_.fit;
+  // The first fit has no pose to keep, only hypotheses: a pull towards rest angles there turns
+  // a forearm to explain a hand bent sideways (the Indian dance's first frame: both wrists 8-12 cm
+  // off with a quadratic pull of weight 5 or 15; 0.5-1.4 cm without).
+  SilhouetteFitOptions init_fit = options_.fit;
+  init_fit.rest_prior_scale = 0.0;
+  SilhouetteFitOptions hypothesis_options = init_fit;
   hypothesis_options.prior_weight = 0.2;
   hypothesis_options.rounds = 2;
   hypothesis_options.max_iterations = 20;
@@ -362,14 +368,14 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
     }
   }
   // Joint shape-and-pose fit from the best hypothesis, then a final pose refinement.
-  SilhouetteFitOptions shape_options = options_.fit;
+  SilhouetteFitOptions shape_options = init_fit;
   shape_options.fit_shape = true;
   shape_options.rounds = options_.init_rounds;
   shape_options.max_iterations = options_.init_max_iterations;
   shape_options.prior_weight = 0.2;
   shape_options.shape_prior_weight = options_.init_shape_prior_weight;
   shape_options.shape_proportion_weight = options_.init_shape_proportion_weight;
-  SilhouetteFitOptions refine = options_.fit;
+  SilhouetteFitOptions refine = init_fit;
   refine.prior_weight = 0.2;
   refine.rounds = 2;
   refine.coarse_to_fine = false;
