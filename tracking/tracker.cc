@@ -144,6 +144,8 @@ void TrackerOptions::Check() const {
   RequireOption(init_max_iterations >= 1, owner + "init_max_iterations", init_max_iterations, ">= 1");
   RequireOption(skirt_min_iou_gain >= 0 && skirt_min_iou_gain < 1, owner + "skirt_min_iou_gain", skirt_min_iou_gain,
                 "in [0, 1)");
+  RequireOption(init_rest_pull_min_iou_gain >= 0 && init_rest_pull_min_iou_gain < 1,
+                owner + "init_rest_pull_min_iou_gain", init_rest_pull_min_iou_gain, "in [0, 1)");
   RequireOption(skirt_try_below_iou >= 0 && skirt_try_below_iou <= 1, owner + "skirt_try_below_iou",
                 skirt_try_below_iou, "in [0, 1]");
   RequireOption(girth_inflation_max >= 0 && girth_inflation_max <= 0.5, owner + "girth_inflation_max",
@@ -208,7 +210,7 @@ TrackedFrame Tracker::FitLimbHypothesis(const TemplatePose& hypothesis, int fram
   SilhouetteFitOptions fit = options_.fit;
   fit.prior_weight = 0.2;  // towards the hypothesis itself
   fit.coarse_to_fine = false;
-  if (!initialized_) fit.rest_prior_scale = 0.0;  // as in Initialize
+  if (!initialized_) fit.rest_prior_scale = init_rest_prior_scale_;  // as Initialize chose
   TrackedFrame candidate;
   candidate.frame = frame;
   candidate.pose = hypothesis;
@@ -321,30 +323,13 @@ void Tracker::InflateGirths(const std::vector<Image>& masks, const std::vector<b
   *result = std::move(best);
 }
 
-TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
-  const auto start = std::chrono::steady_clock::now();
-  const std::clock_t cpu_start = std::clock();
-  TrackedFrame result;
-  result.frame = frame;
-  const std::vector<bool> use = UsableCameras(masks, &result.flags);
-  initialized_ = false;
-  placement_ = EstimatePlacementFromHull(rig_, masks, use);
-  history_.clear();
-  iou_history_.clear();
-  contour_history_.clear();
-  replaced_joints_.clear();
-  last_mask_hashes_.clear();
-  if (!placement_.ok) {
-    result.flags.push_back("no_hull");
-    return result;
-  }
-  shape_ = BodyShape::Uniform(std::clamp(placement_.height_m, 1.0, 2.3));
-  const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);
-  // The first fit has no pose to keep, only hypotheses: a pull towards rest angles there turns
-  // a forearm to explain a hand bent sideways (the Indian dance's first frame: both wrists 8-12 cm
-  // off with a quadratic pull of weight 5 or 15; 0.5-1.4 cm without).
+// The first frame's shape and pose from `start_shape` (hypotheses of facing and arms, then a joint
+// shape-and-pose fit), with the pulls towards rest angles scaled by `rest_prior_scale`.
+TrackedFrame Tracker::FitFirstFrame(int frame, const std::vector<Image>& masks, const std::vector<bool>& use,
+                                    const SilhouetteObservations& observations, const BodyShape& start_shape,
+                                    double rest_prior_scale, BodyShape* fitted_shape) const {
   SilhouetteFitOptions init_fit = options_.fit;
-  init_fit.rest_prior_scale = 0.0;
+  init_fit.rest_prior_scale = rest_prior_scale;
   SilhouetteFitOptions hypothesis_options = init_fit;
   hypothesis_options.prior_weight = 0.2;
   hypothesis_options.rounds = 2;
@@ -361,9 +346,9 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
       const double arm = arm_deg * M_PI / 180.0;
       pose.dofs[kJointLeftShoulder] = {0.0, arm, 0.0};
       pose.dofs[kJointRightShoulder] = {0.0, -arm, 0.0};
-      BodyShape shape = shape_;
+      BodyShape shape = start_shape;
       candidate.fit = FitTemplateToSilhouettes(body_, observations, hypothesis_options, &shape, &pose);
-      Evaluate(shape_, masks, use, &candidate);
+      Evaluate(start_shape, masks, use, &candidate);
       if (candidate.mean_iou > best.mean_iou) best = candidate;
     }
   }
@@ -382,13 +367,12 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   // Two hypotheses: no skirt (the DOF held at zero), and a skirt fitted from a long start (the
   // shape fit alone does not find a skirt from none), tried only when the first leaves the
   // silhouettes poorly explained. The skirt wins only when its overlap is clearly better.
-  const BodyShape start_shape = shape_;
+  TrackedFrame result;
   result.mean_iou = -1.0;
   for (int skirt_start = 0; skirt_start < (options_.try_skirt ? 2 : 1); ++skirt_start) {
     if (skirt_start == 1 && result.mean_iou >= options_.skirt_try_below_iou) break;
     TrackedFrame candidate;
     candidate.frame = frame;
-    candidate.flags = result.flags;
     BodyShape shape = start_shape;
     if (skirt_start == 1) {
       shape.skirt_length_m = 0.5 * shape.length_scale[0];
@@ -408,9 +392,53 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
     Evaluate(shape, masks, use, &candidate);
     if (candidate.mean_iou > result.mean_iou + (skirt_start == 1 ? options_.skirt_min_iou_gain : 0.0)) {
       result = candidate;
-      shape_ = shape;
+      *fitted_shape = shape;
     }
   }
+  return result;
+}
+
+TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
+  TrackedFrame result;
+  result.frame = frame;
+  const std::vector<bool> use = UsableCameras(masks, &result.flags);
+  initialized_ = false;
+  placement_ = EstimatePlacementFromHull(rig_, masks, use);
+  history_.clear();
+  iou_history_.clear();
+  contour_history_.clear();
+  replaced_joints_.clear();
+  last_mask_hashes_.clear();
+  if (!placement_.ok) {
+    result.flags.push_back("no_hull");
+    return result;
+  }
+  shape_ = BodyShape::Uniform(std::clamp(placement_.height_m, 1.0, 2.3));
+  const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);
+  // Without and with the wrists' pull towards straight hands (JointDof::rest_weight): a boxer's
+  // guard comes out with arms 10% short without it (Bandai's kick and punch), a hand bent across
+  // the forearm turns the forearm with it (the Indian dance: wrists 12 cm off).
+  const BodyShape start_shape = shape_;
+  BodyShape fitted_shape = start_shape;
+  TrackedFrame fitted = FitFirstFrame(frame, masks, use, observations, start_shape, 0.0, &fitted_shape);
+  init_rest_prior_scale_ = 0.0;
+  if (options_.fit.rest_prior_scale > 0.0) {
+    BodyShape pulled_shape = start_shape;
+    TrackedFrame pulled =
+        FitFirstFrame(frame, masks, use, observations, start_shape, options_.fit.rest_prior_scale, &pulled_shape);
+    if (pulled.mean_iou > fitted.mean_iou + options_.init_rest_pull_min_iou_gain) {
+      fitted = std::move(pulled);
+      fitted_shape = pulled_shape;
+      init_rest_prior_scale_ = options_.fit.rest_prior_scale;
+      result.flags.push_back("wrists_pulled");
+    }
+  }
+  fitted.flags.insert(fitted.flags.begin(), result.flags.begin(), result.flags.end());
+  result = std::move(fitted);
+  shape_ = fitted_shape;
+  Evaluate(shape_, masks, use, &result);  // the joints of the shape kept
   if (options_.limb_search) SearchLimbs(masks, use, observations, options_.limb_fits_init, &result);
   SettleLimbsByLandmarks(masks, use, observations, &result);
   InflateGirths(masks, use, &result);

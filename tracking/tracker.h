@@ -49,6 +49,9 @@ struct TrackerOptions {
   bool try_skirt = true;           // initial shape fit also from a long skirt (BodyShape::skirt_*) ...
   double skirt_try_below_iou = 0.92; // ... when the fit without one has a mean IoU below this (1: always) ...
   double skirt_min_iou_gain = 0.01; // ... kept when its mean IoU beats the fit without by this much
+  // The first frame is fitted without and with the pulls towards rest angles (fit.rest_prior_scale);
+  // the pulled fit is kept when its mean IoU beats the other by this much.
+  double init_rest_pull_min_iou_gain = 0.002;
   // After the initial fit, every girth (and the skirt's flare) is tried grown by up to this
   // fraction in steps of girth_inflation_step, kept at the step that overlaps the tracking cameras
   // best when that beats the fit by girth_inflation_min_gain (0: never). The fit keeps the
@@ -172,6 +175,11 @@ class Tracker {
                               const SilhouetteObservations& observations, TrackedFrame* result);
   // Grows every girth of the shape where that overlaps the masks better (TrackerOptions::girth_inflation_max).
   void InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result);
+  // Initialize's fit of the first frame from `start_shape`, with the pulls towards rest angles
+  // scaled by `rest_prior_scale`; the shape in `fitted_shape`.
+  TrackedFrame FitFirstFrame(int frame, const std::vector<Image>& masks, const std::vector<bool>& use,
+                             const SilhouetteObservations& observations, const BodyShape& start_shape,
+                             double rest_prior_scale, BodyShape* fitted_shape) const;
 
   Rig rig_;
   std::vector<bool> excluded_;
@@ -186,6 +194,8 @@ class Tracker {
   // Joints of the limbs that the last accepted frame re-placed (limb search, landmarks): their
   // jump is a correction, not a motion, so the next prediction does not extrapolate it.
   std::vector<int> replaced_joints_;
+  // The scale of the pulls towards rest angles that the first frame's fit kept (Initialize).
+  double init_rest_prior_scale_ = 0.0;
   std::vector<std::size_t> last_mask_hashes_;
   LandmarkSource landmarks_;
 };

@@ -27,6 +27,12 @@ TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
   tracker = TrackerOptions();
   tracker.fit.downscale = 17;
   testing::ExpectCheckRefuses(tracker, "SilhouetteFitOptions.downscale = 17: must be in [0, 16]");
+  tracker = TrackerOptions();
+  tracker.fit.rest_prior_scale = -1;
+  testing::ExpectCheckRefuses(tracker, "SilhouetteFitOptions.rest_prior_scale = -1: must be >= 0");
+  tracker = TrackerOptions();
+  tracker.init_rest_pull_min_iou_gain = 1;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.init_rest_pull_min_iou_gain = 1: must be in [0, 1)");
   ScanRegistrationOptions registration;
   registration.min_pair_distance_m = 0.2;
   registration.max_pair_distance_m = 0.1;
