@@ -34,7 +34,7 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
   inputs.fps = RunFrameRate(capture);
   inputs.tracker.fit.downscale = args.get_int("downscale", inputs.tracker.fit.downscale);
   inputs.tracker.fit.num_threads = args.get_int("threads", inputs.tracker.fit.num_threads);
-  inputs.tracker.girth_inflation_max = GirthInflationFromArgs(args);
+  if (const std::optional<double> inflation = GirthInflationFromArgs(args)) inputs.tracker.InflateGirthsAlways(*inflation);
   inputs.tracker.Check();
   inputs.landmarks = !args.has("no-landmarks");
   TrackingReportOptions report_options;

@@ -1,6 +1,8 @@
 #pragma once
 // The tracker options that `confluent run` and `confluent track` share.
 
+#include <optional>
+
 #include "app/command_line.h"
 
 namespace confluent::app {
@@ -8,8 +10,8 @@ namespace confluent::app {
 // --girth-inflation F.
 OptionSpec GirthInflationOptionSpec();
 
-// TrackerOptions::girth_inflation_max from --girth-inflation (0 when absent). Throws UsageError
-// outside [0, 0.5].
-double GirthInflationFromArgs(const ParsedArgs& args);
+// --girth-inflation's fraction (TrackerOptions::InflateGirthsAlways); empty when absent (the
+// tracker's automatic default). Throws UsageError outside [0, 0.5].
+std::optional<double> GirthInflationFromArgs(const ParsedArgs& args);
 
 }  // namespace confluent::app

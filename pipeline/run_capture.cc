@@ -64,7 +64,7 @@ std::string RunCapture(const RunOptions& options, const std::function<ProgressCa
   inputs.refine_photo = options.refine_silhouettes && options.refine_photo;
   inputs.threads = options.threads;
   inputs.landmarks = options.landmarks;
-  inputs.tracker.girth_inflation_max = options.girth_inflation;
+  if (options.girth_inflation) inputs.tracker.InflateGirthsAlways(*options.girth_inflation);
   inputs.tracker.Check();
 
   fs::create_directories(inputs.folder.root);

@@ -2,6 +2,7 @@
 // `confluent run` as one call: a capture to 3D video, every stage resumable (run_stages.h).
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,7 @@ struct RunOptions {
   int refine_keyframes = 1;            // RunInputs::refine_keyframes
   bool refine_photo = true;
   bool landmarks = true;               // RunInputs::landmarks
-  double girth_inflation = 0.0;        // TrackerOptions::girth_inflation_max
+  std::optional<double> girth_inflation;  // TrackerOptions::InflateGirthsAlways; absent: the tracker's automatic default
   bool render = true;                  // the orbit 3D video
   RenderStageOptions render_options;
   int threads = 2;

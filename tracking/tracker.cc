@@ -150,6 +150,8 @@ void TrackerOptions::Check() const {
                 skirt_try_below_iou, "in [0, 1]");
   RequireOption(girth_inflation_max >= 0 && girth_inflation_max <= 0.5, owner + "girth_inflation_max",
                 girth_inflation_max, "in [0, 0.5]");
+  RequireOption(girth_inflation_below_iou >= 0 && girth_inflation_below_iou <= 1, owner + "girth_inflation_below_iou",
+                girth_inflation_below_iou, "in [0, 1]");
   RequireOption(girth_inflation_step > 0 && girth_inflation_step <= 0.5, owner + "girth_inflation_step",
                 girth_inflation_step, "in (0, 0.5]");
   RequireOption(girth_inflation_min_gain >= 0, owner + "girth_inflation_min_gain", girth_inflation_min_gain, ">= 0");
@@ -304,7 +306,7 @@ void Tracker::Evaluate(const BodyShape& shape, const std::vector<Image>& masks, 
 }
 
 void Tracker::InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result) {
-  if (options_.girth_inflation_max <= 0.0) return;
+  if (options_.girth_inflation_max <= 0.0 || result->mean_iou >= options_.girth_inflation_below_iou) return;
   TrackedFrame best = *result;
   double best_fraction = 0.0;
   const int steps = static_cast<int>(std::floor(options_.girth_inflation_max / options_.girth_inflation_step + 1e-9));

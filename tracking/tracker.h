@@ -56,8 +56,11 @@ struct TrackerOptions {
   // fraction in steps of girth_inflation_step, kept at the step that overlaps the tracking cameras
   // best when that beats the fit by girth_inflation_min_gain (0: never). The fit keeps the
   // template inside the silhouettes, so loose clothes and cameras that disagree by a few pixels
-  // leave it thin (the Tsinghua dancer: 3-4 px inside the masks all round).
-  double girth_inflation_max = 0.0;
+  // leave it thin (the Tsinghua dancer: 3-4 px inside the masks all round). Tried only when the
+  // fit leaves the tracking cameras' mean IoU below girth_inflation_below_iou (1: always): grown
+  // capsules poke out of every later frame's silhouettes, which costs a well-fitted capture's scan.
+  double girth_inflation_max = 0.1;
+  double girth_inflation_below_iou = 0.91;
   double girth_inflation_step = 0.02;
   double girth_inflation_min_gain = 0.003;
   double velocity_damping = 0.7;   // fraction of the last frame's velocity used for the prediction
@@ -96,6 +99,11 @@ struct TrackerOptions {
   // other way in front of the chest) is found there.
   int landmark_check_every = 5;
   // Throws UsageError for out-of-range values.
+  // --girth-inflation F: grow the girths by up to F whatever the first frame's overlap (0: never).
+  void InflateGirthsAlways(double max_fraction) {
+    girth_inflation_max = max_fraction;
+    girth_inflation_below_iou = 1.0;
+  }
   void Check() const;
 };
 

@@ -51,9 +51,11 @@ struct Initialised {
   bool inflated = false;
 };
 
-Initialised Initialise(const Scene& scene, const std::vector<Image>& masks, double inflation_max) {
+Initialised Initialise(const Scene& scene, const std::vector<Image>& masks, double inflation_max,
+                       double below_iou = 1.0) {
   TrackerOptions options;
   options.girth_inflation_max = inflation_max;
+  options.girth_inflation_below_iou = below_iou;
   std::vector<bool> held_out(scene.rig.size(), false);
   held_out.back() = true;
   Tracker tracker(scene.rig, held_out, options);
@@ -89,6 +91,27 @@ TEST(GirthInflation, OnExactMasksTheHeldOutCameraLosesNothing) {
   EXPECT_GE(grown.frame.mean_iou, plain.frame.mean_iou);
   EXPECT_GT(grown.held_out_iou, plain.held_out_iou - 0.002) << plain.held_out_iou << " -> " << grown.held_out_iou;
   EXPECT_GT(grown.held_out_iou, 0.9);
+}
+
+// By default the girths are grown only where the first frame's fit explains the silhouettes
+// poorly (TrackerOptions::girth_inflation_below_iou): on either side of the fit's own IoU.
+TEST(GirthInflation, ByDefaultOnlyAPoorlyFittingFirstFrameIsGrown) {
+  const Scene scene;
+  const std::vector<Image> masks = scene.Masks(1.5);
+  const Initialised plain = Initialise(scene, masks, 0.0);
+  const double fitted_iou = plain.frame.mean_iou;
+  const Initialised well_fitted = Initialise(scene, masks, 0.1, fitted_iou - 0.001);
+  const Initialised poorly_fitted = Initialise(scene, masks, 0.1, fitted_iou + 0.001);
+  EXPECT_FALSE(well_fitted.inflated);
+  EXPECT_EQ(well_fitted.frame.mean_iou, fitted_iou);
+  EXPECT_TRUE(poorly_fitted.inflated);
+  EXPECT_GT(poorly_fitted.frame.mean_iou, fitted_iou + 0.003);
+  TrackerOptions defaults;
+  EXPECT_GT(defaults.girth_inflation_max, 0.0);
+  EXPECT_LT(defaults.girth_inflation_below_iou, 1.0);
+  defaults.InflateGirthsAlways(0.2);
+  EXPECT_EQ(defaults.girth_inflation_max, 0.2);
+  EXPECT_EQ(defaults.girth_inflation_below_iou, 1.0);
 }
 
 }  // namespace

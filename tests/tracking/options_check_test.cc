@@ -25,6 +25,9 @@ TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
   tracker.girth_inflation_max = 0.6;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.girth_inflation_max = 0.6: must be in [0, 0.5]");
   tracker = TrackerOptions();
+  tracker.girth_inflation_below_iou = 1.5;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.girth_inflation_below_iou = 1.5: must be in [0, 1]");
+  tracker = TrackerOptions();
   tracker.fit.downscale = 17;
   testing::ExpectCheckRefuses(tracker, "SilhouetteFitOptions.downscale = 17: must be in [0, 16]");
   tracker = TrackerOptions();
