@@ -51,8 +51,13 @@ struct PersonSegmentation {
   Image probability;  // 1 channel, 8 bits, the image's size: 255 = certainly the person (0 without a person)
   Image mask;         // 1 channel, 0/255: probability above the threshold
   // Body landmarks (BlazePose order: 0 nose ... 11/12 shoulders, 23/24 hips, 31/32 toes): image
-  // pixels x, y and visibility in [0, 1].
-  std::array<Eigen::Vector3f, kPersonLandmarks> landmarks{};
+  // pixels x, y and visibility in [0, 1]; all zero (unseen) until set. (`{}` alone would leave
+  // them uninitialised: Eigen's default constructor does not zero.)
+  std::array<Eigen::Vector3f, kPersonLandmarks> landmarks = [] {
+    std::array<Eigen::Vector3f, kPersonLandmarks> unseen;
+    unseen.fill(Eigen::Vector3f::Zero());
+    return unseen;
+  }();
   double presence = 0;  // the model's pose-presence score in [0, 1] for the final crop
   PersonCrop crop;      // the final crop
   bool found() const;   // the mask holds a pixel
