@@ -154,9 +154,10 @@ void AddJointPriorAndLimits(const BodyTemplate& body, int joint, const double* p
 void AddJointRestPrior(const BodyTemplate& body, int joint, double scale, double* block, ceres::Problem* problem) {
   const JointDof& dof = body.dofs()[joint];
   const int n = dof.num_dof();
+  if (scale == 0.0 || std::all_of(dof.rest_weight.begin(), dof.rest_weight.begin() + n, [](double w) { return w == 0.0; }))
+    return;  // every joint but the wrists, in every frame's fit: no allocation
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
   for (int k = 0; k < n; ++k) A(k, k) = dof.rest_weight[k] * scale;
-  if (A.isZero()) return;
   ceres::LossFunction* loss = nullptr;
   if (dof.rest_fade_rad > 0) {
     const double max_weight = A.diagonal().maxCoeff();

@@ -417,12 +417,11 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
     result.flags.push_back("no_hull");
     return result;
   }
-  shape_ = BodyShape::Uniform(std::clamp(placement_.height_m, 1.0, 2.3));
   const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);
   // Without and with the wrists' pull towards straight hands (JointDof::rest_weight): a boxer's
   // guard comes out with arms 10% short without it (Bandai's kick and punch), a hand bent across
   // the forearm turns the forearm with it (the Indian dance: wrists 12 cm off).
-  const BodyShape start_shape = shape_;
+  const BodyShape start_shape = BodyShape::Uniform(std::clamp(placement_.height_m, 1.0, 2.3));
   BodyShape fitted_shape = start_shape;
   TrackedFrame fitted = FitFirstFrame(frame, masks, use, observations, start_shape, 0.0, &fitted_shape);
   init_rest_prior_scale_ = 0.0;
@@ -439,8 +438,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   }
   fitted.flags.insert(fitted.flags.begin(), result.flags.begin(), result.flags.end());
   result = std::move(fitted);
-  shape_ = fitted_shape;
-  Evaluate(shape_, masks, use, &result);  // the joints of the shape kept
+  shape_ = fitted_shape;  // FitFirstFrame evaluated `result` with it
   if (options_.limb_search) SearchLimbs(masks, use, observations, options_.limb_fits_init, &result);
   SettleLimbsByLandmarks(masks, use, observations, &result);
   InflateGirths(masks, use, &result);

@@ -98,12 +98,12 @@ struct TrackerOptions {
   // frames (0: never): a limb held wrong where the overlap does not drop (a forearm folded the
   // other way in front of the chest) is found there.
   int landmark_check_every = 5;
-  // Throws UsageError for out-of-range values.
   // --girth-inflation F: grow the girths by up to F whatever the first frame's overlap (0: never).
   void InflateGirthsAlways(double max_fraction) {
     girth_inflation_max = max_fraction;
     girth_inflation_below_iou = 1.0;
   }
+  // Throws UsageError for out-of-range values.
   void Check() const;
 };
 
