@@ -302,7 +302,7 @@ void Tracker::Evaluate(const BodyShape& shape, const std::vector<Image>& masks, 
     ++n;
   }
   result->mean_iou = n ? sum / n : 0.0;
-  result->joints = body_.JointPositions(shape_, result->pose);
+  result->joints = body_.JointPositions(shape, result->pose);
 }
 
 void Tracker::InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result) {

@@ -168,6 +168,7 @@ class Tracker {
 
  private:
   std::vector<bool> UsableCameras(const std::vector<Image>& masks, std::vector<std::string>* flags) const;
+  // result->pose's overlap with the masks of the cameras in `use` and its joints, with `shape`.
   void Evaluate(const BodyShape& shape, const std::vector<Image>& masks, const std::vector<bool>& use,
                 TrackedFrame* result) const;
   // `hypothesis` fitted to `observations` (pulled towards itself, all segments at once) and scored.

@@ -110,6 +110,9 @@ TEST(SilhouetteFit, InitialisesShapeAndPoseFromTheVisualHull) {
   const TrackedFrame result = tracker.Initialize(0, masks);
   ASSERT_TRUE(tracker.initialized());
   const auto joints = tracker.body().JointPositions(tracker.shape(), result.pose);
+  // The frame's joints are those of the shape kept (the landmarks' check compares them).
+  ASSERT_EQ(result.joints.size(), joints.size());
+  for (std::size_t j = 0; j < joints.size(); ++j) EXPECT_LT((result.joints[j] - joints[j]).norm(), 1e-9) << j;
   const auto expected = body.JointPositions(truth_shape, truth);
   double sum = 0;
   for (std::size_t j = 0; j < joints.size(); ++j) sum += (joints[j] - expected[j]).norm();
