@@ -11,11 +11,28 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "silhouette/multiview.h"
 
 namespace confluent::app {
 namespace fs = std::filesystem;
 
 namespace {
+
+// The silhouettes' multi-view confidence of the same masks (silhouette/multiview.h), beside the hull
+// IoU: with few cameras even true masks score a low IoU (a hull from three is much larger than the
+// person), whereas the part of a mask the others' hull explains stays near 1 for good masks.
+void PrintMaskConfidence(const Rig& rig, std::vector<Image> masks, nlohmann::json* json) {
+  const std::vector<ViewConsistency> views = CheckMultiView(rig, &masks, {}, MultiViewOptions());
+  std::printf("\nmulti-view confidence (as `silhouettes` scores masks; hull of every camera %.2f m3):\n",
+              views.empty() ? 0.0 : views[0].hull_volume_m3);
+  for (int c = 0; c < rig.size(); ++c) {
+    const ViewConsistency& view = views[c];
+    std::printf("  %-12s explained %.3f  covered %.3f  confidence %.3f\n", rig.cameras[c].name.c_str(),
+                view.explained, view.covered, view.confidence);
+    (*json)["mask_confidence"][rig.cameras[c].name] = {
+        {"explained", view.explained}, {"covered", view.covered}, {"confidence", view.confidence}};
+  }
+}
 
 int RunCalibCheck(const ParsedArgs& args, const Context& context) {
   const std::string root = args.positionals()[0];
@@ -80,6 +97,7 @@ int RunCalibCheck(const ParsedArgs& args, const Context& context) {
       WriteImage((fs::path(out_dir) / (rig.cameras[c].name + "_hull.png")).string(), hulls[i]);
     }
     std::printf("  mean IoU %.3f\n", sum / std::max<std::size_t>(1, ious.size()));
+    if (targets.empty()) PrintMaskConfidence(rig, masks, &json);
   }
   WriteTextFile((fs::path(out_dir) / "check.json").string(), json.dump(2));
   std::printf("\noverlays written to %s\n", out_dir.c_str());
@@ -103,7 +121,9 @@ CommandSpec MakeCalibCheckCommand() {
       "Reports per camera the distance to the capture volume, whether it looks at it, focal length and field of\n"
       "view, and baselines; warns on implausible units, mixed handedness and cameras facing away. Writes\n"
       "DIR/<cam>.png with the world axes (X red, Y green, Z blue) and a 1 m ground grid. When the capture has\n"
-      "masks/, carves a visual hull from the other cameras and reports its IoU with each camera's mask.\n"
+      "masks/, carves a visual hull from the other cameras and reports its IoU with each camera's mask, and\n"
+      "(without --heldout) each mask's multi-view confidence as `silhouettes` computes it: the part of the\n"
+      "mask the others' hull explains and the part of that hull it covers.\n"
       "Exit status 1 when a warning is raised or a hull IoU is below --min-iou.";
   spec.min_positionals = spec.max_positionals = 1;
   spec.options = {

@@ -5,12 +5,14 @@
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 
 #include "calib/capture.h"
 #include "calib/rig_check.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "silhouette/multiview.h"
 #include "tests/app/capture_fixture.h"
 #include "tests/support/test_support.h"
 
@@ -124,28 +126,64 @@ TEST(CaptureCli, ImageSizeDifferentFromCalibrationIsNamed) {
   ExpectOneLineErrorNaming(RunConfluent({"capture", "info", dir / "cap"}), "cam00/000001.png", "50x40");
 }
 
-TEST(CalibCheck, ConsistentRigAndMasksPass) {
-  TempDir dir;
+// A one-frame capture of 6 ring cameras at 160x120 with exact masks.
+void WriteSixCameraCapture(const std::string& path) {
   testing::FixtureOptions options;
   options.num_cameras = 6;
   options.num_frames = 1;
   options.width = 160;
   options.height = 120;
-  testing::WriteFixtureCapture(dir / "cap", options);
+  testing::WriteFixtureCapture(path, options);
+}
+
+TEST(CalibCheck, ConsistentRigAndMasksPass) {
+  TempDir dir;
+  WriteSixCameraCapture(dir / "cap");
   const CommandResult result = RunConfluent({"calib", "check", dir / "cap", "--out", dir / "check"});
   EXPECT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
   for (int c = 0; c < 6; ++c) EXPECT_TRUE(fs::exists(dir / ("check/cam0" + std::to_string(c) + ".png")));
   EXPECT_NE(result.stdout_text.find("mean IoU"), std::string::npos);
 }
 
+// calib check's multi-view confidence of `dir`/cap's masks: rig camera name -> {explained, covered, confidence}.
+nlohmann::json CheckedMaskConfidence(const TempDir& dir) {
+  const CommandResult result = RunConfluent({"calib", "check", dir / "cap", "--out", dir / "check"});
+  EXPECT_NE(result.stdout_text.find("multi-view confidence"), std::string::npos) << result.stdout_text;
+  const nlohmann::json json = nlohmann::json::parse(Slurp(dir / "check/check.json"));
+  EXPECT_TRUE(json.contains("mask_confidence")) << json.dump(2);
+  return json.value("mask_confidence", nlohmann::json::object());
+}
+
+TEST(CalibCheck, ReportsEachMasksMultiViewConfidenceAndFlagsAShiftedOne) {
+  TempDir dir;
+  WriteSixCameraCapture(dir / "cap");
+  // Exact masks: every camera above silhouettes' flagging threshold, its mask explained by the others' hull.
+  const double flagged_below = MultiViewOptions().min_confidence;
+  const nlohmann::json exact = CheckedMaskConfidence(dir);
+  ASSERT_EQ(exact.size(), 6u) << exact.dump();
+  for (const auto& [name, view] : exact.items()) {
+    EXPECT_GE(view["confidence"].get<double>(), flagged_below) << name << " " << view.dump();
+    EXPECT_GT(view["explained"].get<double>(), 0.95) << name << " " << view.dump();
+  }
+  // cam02's mask moved 30 px sideways (a fifth of the image): it no longer agrees with the others.
+  const std::string shifted_path = dir / "cap/masks/cam02/000000.png";
+  const Image mask = ReadImage(shifted_path);
+  Image shifted(mask.width, mask.height, 1);
+  for (int y = 0; y < mask.height; ++y)
+    for (int x = 30; x < mask.width; ++x)
+      shifted.at<std::uint8_t>(x, y) = mask.at<std::uint8_t>(x - 30, y, mask.channels - 1);
+  WriteImage(shifted_path, shifted);
+  const nlohmann::json moved = CheckedMaskConfidence(dir);
+  ASSERT_EQ(moved.size(), 6u) << moved.dump();
+  EXPECT_LT(moved["cam02"]["confidence"].get<double>(), flagged_below) << moved.dump();
+  EXPECT_LT(moved["cam02"]["explained"].get<double>(), 0.9) << moved.dump();
+  for (const auto& [name, view] : moved.items())
+    if (name != "cam02") EXPECT_GT(view["explained"].get<double>(), 0.95) << name << " " << view.dump();
+}
+
 TEST(CalibCheck, HullOfExactMasksMatchesEachCamera) {
   TempDir dir;
-  testing::FixtureOptions options;
-  options.num_cameras = 6;
-  options.num_frames = 1;
-  options.width = 160;
-  options.height = 120;
-  testing::WriteFixtureCapture(dir / "cap", options);
+  WriteSixCameraCapture(dir / "cap");
   const Capture capture = Capture::Open(dir / "cap");
   std::vector<Image> masks;
   for (int c = 0; c < capture.num_cameras(); ++c) masks.push_back(capture.ReadMask(c, 0));
