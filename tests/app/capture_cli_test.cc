@@ -14,6 +14,7 @@
 #include "core/image_io.h"
 #include "silhouette/multiview.h"
 #include "tests/app/capture_fixture.h"
+#include "tests/support/mask_edits.h"
 #include "tests/support/test_support.h"
 
 namespace confluent {
@@ -166,19 +167,16 @@ TEST(CalibCheck, ReportsEachMasksMultiViewConfidenceAndFlagsAShiftedOne) {
     EXPECT_GT(view["explained"].get<double>(), 0.95) << name << " " << view.dump();
   }
   // cam02's mask moved 30 px sideways (a fifth of the image): it no longer agrees with the others.
-  const std::string shifted_path = dir / "cap/masks/cam02/000000.png";
-  const Image mask = ReadImage(shifted_path);
-  Image shifted(mask.width, mask.height, 1);
-  for (int y = 0; y < mask.height; ++y)
-    for (int x = 30; x < mask.width; ++x)
-      shifted.at<std::uint8_t>(x, y) = mask.at<std::uint8_t>(x - 30, y, mask.channels - 1);
-  WriteImage(shifted_path, shifted);
+  const Image mask = Capture::Open(dir / "cap").ReadMask(2, 0);
+  WriteImage(dir / "cap/masks/cam02/000000.png", testing::ShiftedMask(mask, 30));
   const nlohmann::json moved = CheckedMaskConfidence(dir);
   ASSERT_EQ(moved.size(), 6u) << moved.dump();
   EXPECT_LT(moved["cam02"]["confidence"].get<double>(), flagged_below) << moved.dump();
   EXPECT_LT(moved["cam02"]["explained"].get<double>(), 0.9) << moved.dump();
-  for (const auto& [name, view] : moved.items())
-    if (name != "cam02") EXPECT_GT(view["explained"].get<double>(), 0.95) << name << " " << view.dump();
+  for (const auto& [name, view] : moved.items()) {
+    if (name == "cam02") continue;
+    EXPECT_GT(view["explained"].get<double>(), 0.95) << name << " " << view.dump();
+  }
 }
 
 TEST(CalibCheck, HullOfExactMasksMatchesEachCamera) {

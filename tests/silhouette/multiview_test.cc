@@ -14,21 +14,14 @@
 #include "silhouette/multiview.h"
 #include "silhouette/plate_free.h"
 #include "tests/silhouette/multiview_scene.h"
+#include "tests/support/mask_edits.h"
 #include "tests/silhouette/synthetic_scene.h"
 
 namespace confluent {
 namespace {
 
 using testing::Iou;
-
-// `mask` moved right by `dx` pixels.
-Image Shifted(const Image& mask, int dx) {
-  Image out(mask.width, mask.height, 1);
-  for (int y = 0; y < mask.height; ++y)
-    for (int x = 0; x < mask.width; ++x)
-      if (x - dx >= 0 && x - dx < mask.width) out.at<std::uint8_t>(x, y) = mask.at<std::uint8_t>(x - dx, y);
-  return out;
-}
+using testing::ShiftedMask;
 
 void Fill(Image* mask, int x0, int y0, int x1, int y1, std::uint8_t value) {
   for (int y = y0; y < y1; ++y)
@@ -49,7 +42,7 @@ TEST(MultiView, ConsistentMasksAreConfidentShiftedOrEmptyOnesAreNot) {
     EXPECT_EQ(Iou(good[c], masks[c]), 1.0);  // nothing corrected unless asked
   }
   std::vector<Image> bad = masks;
-  bad[2] = Shifted(masks[2], 25);
+  bad[2] = ShiftedMask(masks[2], 25);
   bad[5] = Image(160, 120, 1);
   const std::vector<ViewConsistency> checked = CheckMultiView(rig, &bad, {}, MultiViewOptions{});
   EXPECT_LT(checked[2].confidence, 0.6);
@@ -78,7 +71,7 @@ TEST(MultiView, AHullTooCoarseForThinPartsDoesNotCondemnEveryCamera) {
   }
   EXPECT_GE(unexplained, 5);  // the hull really is too coarse for most cameras
   std::vector<Image> bad = masks;
-  bad[2] = Shifted(masks[2], 25);
+  bad[2] = ShiftedMask(masks[2], 25);
   EXPECT_LT(CheckMultiView(rig, &bad, {}, coarse)[2].confidence, 0.6);
 }
 
@@ -252,7 +245,7 @@ TEST(MultiView, TrustAssessmentWarnsAboutAShiftedCameraOnly) {
   auto read = [&](bool shift_cam1) {
     return [&rig, shift_cam1](int camera, int frame) {
       const Image mask = testing::RenderMask(rig.cameras[camera], testing::MakeActor(0.1 * frame, 0.0, 0.2 * frame));
-      return shift_cam1 && camera == 1 ? Shifted(mask, 30) : mask;
+      return shift_cam1 && camera == 1 ? ShiftedMask(mask, 30) : mask;
     };
   };
   MultiViewOptions options;
