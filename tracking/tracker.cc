@@ -518,6 +518,8 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
     for (int j = 0; j < kNumTemplateJoints; ++j)
       for (int d = 0; d < 3; ++d) predicted.dofs[j][d] = last.dofs[j][d] + k * (last.dofs[j][d] - before.dofs[j][d]);
     for (int j : replaced_joints_) predicted.dofs[j] = last.dofs[j];
+    if (!options_.extrapolate_wrists)
+      for (int j : {kJointLeftWrist, kJointRightWrist}) predicted.dofs[j] = last.dofs[j];
     body_.ClampToLimits(&predicted);
   }
   const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);

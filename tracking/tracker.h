@@ -64,6 +64,10 @@ struct TrackerOptions {
   double girth_inflation_step = 0.02;
   double girth_inflation_min_gain = 0.003;
   double velocity_damping = 0.7;   // fraction of the last frame's velocity used for the prediction
+  // The wrists are predicted where they are, without the velocity: a hand is a few pixels wide,
+  // so its frame-to-frame change is mostly the fit's noise, and extrapolated it becomes a drift
+  // the silhouettes do not resist (a still hand flexed 50 degrees over 16 frames).
+  bool extrapolate_wrists = false;
   double bad_frame_iou = 0.7;      // mean IoU below this triggers a recovery
   double bad_frame_iou_drop = 0.1; // ... or a drop of this much below the running median
   double empty_mask_fraction = 0.2;  // a camera with less foreground than this fraction of the median camera is skipped
