@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "tracking/body_model_impl.h"
 #include "tracking/fit_params.h"
+#include "tracking/segment_samples_cost.h"
 
 namespace confluent {
 
@@ -176,11 +177,10 @@ struct SegmentCost {
   bool skirt_block = false;                // the lower torso with the skirt block (2) after the shape block
   bool section_block = false;              // the section block (40) last
   double ray_weight = 1.0;                 // reduced px per metre at the body, times the term weight
-  // Fast path when the shape is constant: rest joints, the samples relative to the segment's
-  // joint, and the capsule, all precomputed in double.
+  // Fast path when the shape is constant: rest joints and the capsule precomputed in double
+  // (then only rays: the samples' cost is SegmentSamplesCost).
   bool shape_constant = false;
   std::array<Vector3d, kNumTemplateJoints> rest_fixed;
-  std::vector<Vector3d> local_samples;
   ti::SegmentFrame<double> frame_fixed;
   double skirt_fixed[2] = {0.0, 0.0};      // the skirt when it is not a parameter block
   double section_fixed[ti::kSectionBlockSize] = {};  // the cross-sections when they are not a parameter block
@@ -247,16 +247,9 @@ struct SegmentCost {
     const ti::Mat3<T> M = cam.rotation.cast<T>() * R;
     const ti::Vec3<T> c = cam.rotation.cast<T>() * P + cam.translation.cast<T>();
     int r = 0;
-    if (shape_constant) {
-      for (const Vector3d& local : local_samples) {
-        const ti::Vec3<T> Xc = M * local + c;
-        residuals[r++] = SilhouetteResidual(Xc);
-      }
-    } else {
-      for (const SurfaceCoord& sc : samples) {
-        const ti::Vec3<T> Xc = M * (frame.Point(sc) - rest[joint]) + c;
-        residuals[r++] = SilhouetteResidual(Xc);
-      }
+    for (const SurfaceCoord& sc : samples) {
+      const ti::Vec3<T> Xc = M * (frame.Point(sc) - rest[joint]) + c;
+      residuals[r++] = SilhouetteResidual(Xc);
     }
     if (!rays.empty()) {
       const ti::Vec3<T> a = P + R * (frame.a - rest[joint]);
@@ -356,6 +349,24 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
       if (coarse && !IsCoarseSegment(s)) continue;
       for (int kind = 0; kind < 2; ++kind) {
         if (kind == 1 && (assigned[s].empty() || options.image_to_model_weight <= 0)) continue;
+        // Small segments (head, neck, hands, feet) get every other sample.
+        const bool small = s == int(BodySegment::kHead) || s == int(BodySegment::kNeck) ||
+                           s == int(BodySegment::kLeftHand) || s == int(BodySegment::kRightHand) ||
+                           s == int(BodySegment::kLeftFoot) || s == int(BodySegment::kRightFoot);
+        if (kind == 0 && !fit_shape) {
+          // The shape held: the samples' cost with its Jacobian by hand (segment_samples_cost.h).
+          const int joint = body.segments()[s].joint;
+          std::vector<Vector3d> local_samples;
+          const auto& all = body.sample_coords();
+          for (std::size_t i = 0; i < all.size(); i += small ? 2 : 1)
+            local_samples.push_back(segments[s].frame.Point(all[i]) - fixed_rest[joint]);
+          auto* cost = new ti::SegmentSamplesCost(body, joint, chains[s], fp->root_reference, fixed_rest,
+                                                  std::move(local_samples), view.camera, view.scale, *view.interpolator);
+          std::vector<double*> blocks = {fp->root_t, fp->root_aa};
+          for (int j : chains[s]) blocks.push_back(fp->dofs[j].data());
+          problem.AddResidualBlock(cost, new ceres::HuberLoss(options.model_to_image_loss_px), blocks);
+          continue;
+        }
         auto* functor = new SegmentCost;
         functor->body = &body;
         functor->view = &view;
@@ -363,10 +374,6 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
         functor->root_reference = fp->root_reference;
         functor->chain_joints = chains[s];
         if (kind == 0) {
-          // Small segments (head, neck, hands, feet) get every other sample.
-          const bool small = s == int(BodySegment::kHead) || s == int(BodySegment::kNeck) ||
-                             s == int(BodySegment::kLeftHand) || s == int(BodySegment::kRightHand) ||
-                             s == int(BodySegment::kLeftFoot) || s == int(BodySegment::kRightFoot);
           const auto& all = body.sample_coords();
           for (std::size_t i = 0; i < all.size(); i += small ? 2 : 1) functor->samples.push_back(all[i]);
         } else
@@ -381,10 +388,6 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
           functor->shape_constant = true;
           functor->rest_fixed = fixed_rest;
           functor->frame_fixed = segments[s].frame;
-          const int joint = body.segments()[s].joint;
-          if (kind == 0)
-            for (const SurfaceCoord& sc : functor->samples)
-              functor->local_samples.push_back(segments[s].frame.Point(sc) - fixed_rest[joint]);
         }
         const int num_residuals = kind == 0 ? static_cast<int>(functor->samples.size()) : static_cast<int>(functor->rays.size());
         auto* cost = new ceres::DynamicAutoDiffCostFunction<SegmentCost, 18>(functor);
