@@ -1,4 +1,5 @@
-// The one translation unit with Ceres autodiff cost functors of the tracker.
+// The silhouette fit: the masks prepared as distance fields and contour rays, and the Ceres
+// problem over the template's pose and shape (its costs: tracking/segment_costs.h).
 
 #include "tracking/silhouette_fit.h"
 
@@ -15,7 +16,7 @@
 #include "core/error.h"
 #include "tracking/body_model_impl.h"
 #include "tracking/fit_params.h"
-#include "tracking/segment_samples_cost.h"
+#include "tracking/segment_costs.h"
 
 namespace confluent {
 
@@ -162,145 +163,9 @@ using ti::SegmentWorld;
 using ti::TemplateFitSolverOptions;
 using ti::ShapeArrays;
 
-// Residuals of one segment in one camera: model -> image samples and/or image -> model rays.
-// Parameter blocks: root translation (3), root rotation vector (3), the DOF blocks of the
-// joints on the segment's chain (root to segment joint), the shape block (20), then, when the shape is
-// fitted, the skirt block (2, lower torso only) and the section block (40).
-struct SegmentCost {
-  const BodyTemplate* body = nullptr;
-  const PreparedView* view = nullptr;
-  int segment = 0;
-  Matrix3d root_reference = Matrix3d::Identity();
-  std::vector<int> chain_joints;           // joints with DOFs, in parameter-block order
-  std::vector<SurfaceCoord> samples;       // model -> image
-  std::vector<int> rays;                   // image -> model: indices into view rays
-  bool skirt_block = false;                // the lower torso with the skirt block (2) after the shape block
-  bool section_block = false;              // the section block (40) last
-  double ray_weight = 1.0;                 // reduced px per metre at the body, times the term weight
-  // Fast path when the shape is constant: rest joints and the capsule precomputed in double
-  // (then only rays: the samples' cost is SegmentSamplesCost).
-  bool shape_constant = false;
-  std::array<Vector3d, kNumTemplateJoints> rest_fixed;
-  ti::SegmentFrame<double> frame_fixed;
-  double skirt_fixed[2] = {0.0, 0.0};      // the skirt when it is not a parameter block
-  double section_fixed[ti::kSectionBlockSize] = {};  // the cross-sections when they are not a parameter block
-
-  // Camera projection (with distortion when the camera has any) of a camera-frame point to
-  // reduced pixels, then the signed distance residual.
-  template <typename T>
-  T SilhouetteResidual(const ti::Vec3<T>& Xc) const {
-    const Camera& cam = view->camera;
-    if (Xc.z() < T(1e-3)) return T(0.0);
-    const T x = Xc.x() / Xc.z(), y = Xc.y() / Xc.z();
-    T xd = x, yd = y;
-    if (cam.has_distortion()) {
-      const double k1 = cam.dist(0), k2 = cam.dist(1), p1 = cam.dist(2), p2 = cam.dist(3), k3 = cam.dist(4);
-      const T r2 = x * x + y * y;
-      const T radial = T(1.0) + r2 * (T(k1) + r2 * (T(k2) + r2 * T(k3)));
-      xd = x * radial + T(2.0 * p1) * x * y + T(p2) * (r2 + T(2.0) * x * x);
-      yd = y * radial + T(p1) * (r2 + T(2.0) * y * y) + T(2.0 * p2) * x * y;
-    }
-    const double inv_scale = 1.0 / view->scale;
-    const T us = (T(cam.K(0, 0)) * xd + T(cam.K(0, 1)) * yd + T(cam.K(0, 2)) + T(0.5)) * T(inv_scale) - T(0.5);
-    const T vs = (T(cam.K(1, 1)) * yd + T(cam.K(1, 2)) + T(0.5)) * T(inv_scale) - T(0.5);
-    T sd;
-    view->interpolator->Evaluate(vs, us, &sd);
-    return sd > T(0.0) ? sd : T(0.0);  // inside is free; an inward margin would fit the template thin
-  }
-
-  template <typename T>
-  bool operator()(T const* const* p, T* residuals) const {
-    const T* root_t = p[0];
-    const T* root_aa = p[1];
-    const T* jp[kNumTemplateJoints] = {};
-    for (std::size_t i = 0; i < chain_joints.size(); ++i) jp[chain_joints[i]] = p[2 + i];
-    const int joint = body->segments()[segment].joint;
-    std::array<ti::Vec3<T>, kNumTemplateJoints> rest;
-    ti::SegmentFrame<T> frame;
-    if (shape_constant) {
-      for (int j = 0; j < kNumTemplateJoints; ++j) rest[j] = rest_fixed[j].cast<T>();
-      frame = frame_fixed.Cast<T>();
-    } else {
-      const T* shape = p[2 + chain_joints.size()];
-      T length[kNumBodySegments], girth[kNumBodySegments];
-      for (int s = 0; s < kNumBodySegments; ++s) {
-        length[s] = shape[ti::kSegmentGroup[s]];
-        girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
-      }
-      ti::RestPositions(*body, length, girth, &rest);
-      const T no_skirt[2] = {T(skirt_fixed[0]), T(skirt_fixed[1])};
-      ti::Section<T> section;
-      if (section_block) {
-        section = ti::SegmentSection(p[3 + chain_joints.size() + (skirt_block ? 1 : 0)], segment);
-      } else {
-        const ti::Section<double> fixed = ti::SegmentSection(section_fixed, segment);
-        section = {T(fixed.depth), T(fixed.taper), T(fixed.offset), T(fixed.bulge)};
-      }
-      frame = ti::MakeSegmentFrame(*body, segment, rest, length, girth, skirt_block ? p[3 + chain_joints.size()] : no_skirt,
-                                   section);
-    }
-    ti::Mat3<T> R;
-    ti::Vec3<T> P;
-    ti::JointWorldTransform(*body, joint, rest, root_t, root_aa, root_reference, jp, &R, &P);
-    const Camera& cam = view->camera;
-    // camera_from_segment: Xc = M * (X_rest - rest[joint]) + c.
-    const ti::Mat3<T> M = cam.rotation.cast<T>() * R;
-    const ti::Vec3<T> c = cam.rotation.cast<T>() * P + cam.translation.cast<T>();
-    int r = 0;
-    for (const SurfaceCoord& sc : samples) {
-      const ti::Vec3<T> Xc = M * (frame.Point(sc) - rest[joint]) + c;
-      residuals[r++] = SilhouetteResidual(Xc);
-    }
-    if (!rays.empty()) {
-      const ti::Vec3<T> a = P + R * (frame.a - rest[joint]);
-      const ti::Vec3<T> axis = R * frame.axis, e1 = R * frame.e1, e2 = R * frame.e2;
-      for (int index : rays) {
-        const ti::Vec3<T> o = view->ray_origins[index].cast<T>() - a;
-        const Vector3d& d = view->ray_directions[index];
-        const T oz = o.dot(axis), ox = o.dot(e1), oy = o.dot(e2);
-        const T dz = axis.dot(d.cast<T>()), dx = e1.dot(d.cast<T>()), dy = e2.dot(d.cast<T>());
-        const T d_o = dx * ox + dy * oy + dz * oz;
-        const T denom = T(1.0) - dz * dz;
-        T s = denom > T(1e-6) ? (oz - dz * d_o) / denom : oz;
-        bool clamped = false;
-        if (s < T(0.0)) { s = T(0.0); clamped = true; }
-        if (s > frame.length) { s = frame.length; clamped = true; }
-        const T f = s / frame.length;
-        T rx, ry;
-        frame.Radii(f, &rx, &ry);
-        const T qz0 = oz - s;
-        const T inv_cap = clamped ? T(1.0) / (qz0 < T(0.0) ? frame.cap_a : frame.cap_b) : T(0.0);
-        const ti::Vec3<T> av(ox / rx, oy / ry, qz0 * inv_cap), bv(dx / rx, dy / ry, dz * inv_cap);
-        const T tau = -av.dot(bv) / (bv.dot(bv) + T(1e-12));
-        const ti::Vec3<T> q = av + tau * bv;
-        const T nd = sqrt(q.squaredNorm() + T(1e-12));
-        residuals[r++] = (nd - T(1.0)) * T(0.5) * (rx + ry) * T(ray_weight);
-      }
-    }
-    return true;
-  }
-};
-
-// Normalised distance of a ray to a segment capsule (double version for the assignment).
-double RayCapsuleDistance(const ti::SegmentFrame<double>& frame, const Vector3d& a, const Vector3d& axis,
-                          const Vector3d& e1, const Vector3d& e2, const Vector3d& origin, const Vector3d& direction) {
-  const Vector3d o = origin - a;
-  const double oz = o.dot(axis), ox = o.dot(e1), oy = o.dot(e2);
-  const double dz = direction.dot(axis), dx = direction.dot(e1), dy = direction.dot(e2);
-  const double d_o = dx * ox + dy * oy + dz * oz;
-  const double denom = 1.0 - dz * dz;
-  double s = denom > 1e-6 ? (oz - dz * d_o) / denom : oz;
-  bool clamped = false;
-  if (s < 0) { s = 0; clamped = true; }
-  if (s > frame.length) { s = frame.length; clamped = true; }
-  const double f = s / frame.length;
-  double rx, ry;
-  frame.Radii(f, &rx, &ry);
-  const double qz0 = oz - s;
-  const double inv_cap = clamped ? 1.0 / (qz0 < 0 ? frame.cap_a : frame.cap_b) : 0.0;
-  const Vector3d av(ox / rx, oy / ry, qz0 * inv_cap), bv(dx / rx, dy / ry, dz * inv_cap);
-  const double tau = -av.dot(bv) / (bv.dot(bv) + 1e-12);
-  return (av + tau * bv).norm();
+// The normalised distance of a ray to a segment's capsule in the world.
+double RayCapsuleDistance(const SegmentWorld& w, const Vector3d& origin, const Vector3d& direction) {
+  return ti::RayCapsuleDistance(ti::CapsuleAt(w.frame, w.a, w.axis, w.e1, w.e2), origin, direction);
 }
 
 bool IsCoarseSegment(int s) {
@@ -335,7 +200,7 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
       double best_d = 1e18;
       for (int s = 0; s < kNumBodySegments; ++s) {
         const SegmentWorld& w = segments[s];
-        const double d = RayCapsuleDistance(w.frame, w.a, w.axis, w.e1, w.e2, view.ray_origins[i], view.ray_directions[i]);
+        const double d = RayCapsuleDistance(w, view.ray_origins[i], view.ray_directions[i]);
         if (d < best_d) {
           best_d = d;
           best = s;
@@ -353,57 +218,40 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
         const bool small = s == int(BodySegment::kHead) || s == int(BodySegment::kNeck) ||
                            s == int(BodySegment::kLeftHand) || s == int(BodySegment::kRightHand) ||
                            s == int(BodySegment::kLeftFoot) || s == int(BodySegment::kRightFoot);
-        if (kind == 0 && !fit_shape) {
-          // The shape held: the samples' cost with its Jacobian by hand (segment_samples_cost.h).
-          const int joint = body.segments()[s].joint;
-          std::vector<Vector3d> local_samples;
-          const auto& all = body.sample_coords();
-          for (std::size_t i = 0; i < all.size(); i += small ? 2 : 1)
-            local_samples.push_back(segments[s].frame.Point(all[i]) - fixed_rest[joint]);
-          auto* cost = new ti::SegmentSamplesCost(body, joint, chains[s], fp->root_reference, fixed_rest,
-                                                  std::move(local_samples), view.camera, view.scale, *view.interpolator);
-          std::vector<double*> blocks = {fp->root_t, fp->root_aa};
-          for (int j : chains[s]) blocks.push_back(fp->dofs[j].data());
-          problem.AddResidualBlock(cost, new ceres::HuberLoss(options.model_to_image_loss_px), blocks);
-          continue;
-        }
-        auto* functor = new SegmentCost;
-        functor->body = &body;
-        functor->view = &view;
-        functor->segment = s;
-        functor->root_reference = fp->root_reference;
-        functor->chain_joints = chains[s];
+        // The costs, with their Jacobians by hand (segment_costs.h).
+        ti::SegmentShapeBlocks shape;
+        shape.shape = fit_shape;
+        shape.skirt = fit_shape && options.fit_skirt && s == int(BodySegment::kLowerTorso);
+        shape.section = fit_shape && options.fit_sections;
+        shape.rest = fixed_rest;
+        shape.frame = segments[s].frame;
+        shape.skirt_values[0] = fp->skirt[0];
+        shape.skirt_values[1] = fp->skirt[1];
+        shape.section_values.assign(fp->section, fp->section + ti::kSectionBlockSize);
+        std::vector<double*> blocks = {fp->root_t, fp->root_aa};
+        for (int j : chains[s]) blocks.push_back(fp->dofs[j].data());
+        if (shape.shape) blocks.push_back(fp->shape);
+        if (shape.skirt) blocks.push_back(fp->skirt);
+        if (shape.section) blocks.push_back(fp->section);
         if (kind == 0) {
+          std::vector<SurfaceCoord> samples;
           const auto& all = body.sample_coords();
-          for (std::size_t i = 0; i < all.size(); i += small ? 2 : 1) functor->samples.push_back(all[i]);
-        } else
-          functor->rays = assigned[s];
-        functor->ray_weight = px_per_m * options.image_to_model_weight;
-        functor->skirt_fixed[0] = fp->skirt[0];
-        functor->skirt_fixed[1] = fp->skirt[1];
-        functor->skirt_block = fit_shape && options.fit_skirt && s == int(BodySegment::kLowerTorso);
-        std::copy(fp->section, fp->section + ti::kSectionBlockSize, functor->section_fixed);
-        functor->section_block = fit_shape && options.fit_sections;
-        if (!fit_shape) {
-          functor->shape_constant = true;
-          functor->rest_fixed = fixed_rest;
-          functor->frame_fixed = segments[s].frame;
+          for (std::size_t i = 0; i < all.size(); i += small ? 2 : 1) samples.push_back(all[i]);
+          problem.AddResidualBlock(
+              new ti::SegmentSamplesCost(body, s, chains[s], fp->root_reference, std::move(shape), std::move(samples),
+                                         view.camera, view.scale, *view.interpolator),
+              new ceres::HuberLoss(options.model_to_image_loss_px), blocks);
+        } else {
+          std::vector<Vector3d> origins, directions;
+          for (int index : assigned[s]) {
+            origins.push_back(view.ray_origins[index]);
+            directions.push_back(view.ray_directions[index]);
+          }
+          problem.AddResidualBlock(
+              new ti::SegmentRaysCost(body, s, chains[s], fp->root_reference, std::move(shape), std::move(origins),
+                                      std::move(directions), px_per_m * options.image_to_model_weight),
+              new ceres::CauchyLoss(options.image_to_model_loss_px), blocks);
         }
-        const int num_residuals = kind == 0 ? static_cast<int>(functor->samples.size()) : static_cast<int>(functor->rays.size());
-        auto* cost = new ceres::DynamicAutoDiffCostFunction<SegmentCost, 18>(functor);
-        std::vector<double*> blocks = ti::AddSegmentParameterBlocks(body, chains[s], fp, cost);
-        if (functor->skirt_block) {
-          cost->AddParameterBlock(2);
-          blocks.push_back(fp->skirt);
-        }
-        if (functor->section_block) {
-          cost->AddParameterBlock(ti::kSectionBlockSize);
-          blocks.push_back(fp->section);
-        }
-        cost->SetNumResiduals(num_residuals);
-        ceres::LossFunction* loss = kind == 0 ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(options.model_to_image_loss_px))
-                                              : new ceres::CauchyLoss(options.image_to_model_loss_px);
-        problem.AddResidualBlock(cost, loss, blocks);
       }
     }
   }
@@ -438,9 +286,7 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
       problem.SetParameterLowerBound(fp->shape, i, 0.6 * shape_prior[i]);
       problem.SetParameterUpperBound(fp->shape, i, 1.6 * shape_prior[i]);
     }
-  } else {
-    problem.SetParameterBlockConstant(fp->shape);
-  }
+  }  // else the costs hold the shape (SegmentShapeBlocks)
   if (problem.HasParameterBlock(fp->section)) {
     // Cross-sections: a pull towards the generic template's, within plausible bodies.
     Eigen::VectorXd generic(ti::kSectionBlockSize);
@@ -568,7 +414,7 @@ SilhouetteFitSummary FitTemplateToSilhouettes(const BodyTemplate& body, const Si
         int best_s = 0;
         for (int s = 0; s < kNumBodySegments; ++s) {
           const SegmentWorld& w = segments[s];
-          const double d = RayCapsuleDistance(w.frame, w.a, w.axis, w.e1, w.e2, view.ray_origins[i], view.ray_directions[i]);
+          const double d = RayCapsuleDistance(w, view.ray_origins[i], view.ray_directions[i]);
           if (d < best) {
             best = d;
             best_s = s;

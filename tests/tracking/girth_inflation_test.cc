@@ -54,8 +54,7 @@ struct Initialised {
 Initialised Initialise(const Scene& scene, const std::vector<Image>& masks, double inflation_max,
                        double below_iou = 1.0) {
   // The girths are the subject: the first frame is fitted once (no second fit with the wrists
-  // pulled straight, no skirt tried, no lost limb searched): the three tests take 77 s instead of
-  // 278 s on 2 cores.
+  // pulled straight, no skirt tried, no lost limb searched), in a quarter of the time.
   TrackerOptions options;
   options.fit.rest_prior_scale = 0.0;
   options.try_skirt = false;
