@@ -1,4 +1,4 @@
-// Tracking speed: 8 cameras at 1024x768, after initialisation.
+// Tracking speed: 8 cameras at 1024x768, the first frame's initialisation and the frames after.
 //
 // Masks come from the studio capture's ground truth when $CONFLUENT_BENCH_TRACK_MASKS names a
 // folder <dir>/<cam>/<frame>.png and $CONFLUENT_BENCH_TRACK_CAPTURE the capture (intri/extri);
@@ -103,6 +103,18 @@ void BM_PrepareObservations(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_PrepareObservations)->Unit(benchmark::kMillisecond);
+
+// The first frame: placement from the visual hull, the shape-and-pose fits, the girths tried
+// grown where the fit is poor, the skirt tried, lost limbs searched.
+void BM_InitializeFirstFrame(benchmark::State& state) {
+  const Sequence& s = GetSequence();
+  for (auto _ : state) {
+    Tracker tracker(s.rig, {});
+    const TrackedFrame result = tracker.Initialize(0, s.masks[0]);
+    benchmark::DoNotOptimize(result.mean_iou);
+  }
+}
+BENCHMARK(BM_InitializeFirstFrame)->Unit(benchmark::kSecond)->Iterations(1);
 
 // One full tracking step (prediction, observation preparation, fit, overlap check).
 void BM_TrackFrame(benchmark::State& state) {
