@@ -10,13 +10,6 @@ namespace confluent::tracking_internal {
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
-void ShapeArrays(const double* shape, double* length, double* girth) {
-  for (int s = 0; s < kNumBodySegments; ++s) {
-    length[s] = shape[kSegmentGroup[s]];
-    girth[s] = shape[kNumShapeGroups + kSegmentGroup[s]];
-  }
-}
-
 void AddShapeProportionPrior(double weight, double* shape, ceres::Problem* problem) {
   constexpr int n = kNumShapeGroups;
   Eigen::MatrixXd P = Eigen::MatrixXd::Zero(kShapeBlockSize, kShapeBlockSize);

@@ -43,7 +43,13 @@ static_assert(kSectionBlockSize == 40, "FitParams::section's initialiser lists d
 void AddShapeProportionPrior(double weight, double* shape, ceres::Problem* problem);
 
 // Per-segment length and girth scales from a shape block.
-void ShapeArrays(const double* shape, double* length, double* girth);
+template <typename T>
+void ShapeArrays(const T* shape, T* length, T* girth) {
+  for (int s = 0; s < kNumBodySegments; ++s) {
+    length[s] = shape[kSegmentGroup[s]];
+    girth[s] = shape[kNumShapeGroups + kSegmentGroup[s]];
+  }
+}
 // Segment `segment`'s cross-section in a section block.
 template <typename T>
 Section<T> SegmentSection(const T* block, int segment) {

@@ -121,10 +121,7 @@ struct SurfaceCost {
     for (std::size_t i = 0; i < chain_joints.size(); ++i) jp[chain_joints[i]] = p[2 + i];
     const T* shape = p[2 + chain_joints.size()];
     T length[kNumBodySegments], girth[kNumBodySegments];
-    for (int s = 0; s < kNumBodySegments; ++s) {
-      length[s] = shape[ti::kSegmentGroup[s]];
-      girth[s] = shape[ti::kNumShapeGroups + ti::kSegmentGroup[s]];
-    }
+    ShapeArrays(shape, length, girth);
     std::array<ti::Vec3<T>, kNumTemplateJoints> rest;
     ti::RestPositions(*body, length, girth, &rest);
     const ti::SegmentFrame<T> frame =

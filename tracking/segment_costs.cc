@@ -47,8 +47,11 @@ struct RayInCapsule {
 // rbx, ray, rby, bulge); in `mean_radius` the capsule's mean radius where the ray passes.
 template <typename T>
 T RayCapsuleDistance(const T* o, const T* d, const T* scalars, T* mean_radius) {
-  const T &length = scalars[0], &cap_a = scalars[1], &cap_b = scalars[2], &rax = scalars[3], &rbx = scalars[4],
-          &ray = scalars[5], &rby = scalars[6], &bulge = scalars[7];
+  SegmentFrame<T> capsule;  // its scalars only: the ray is already in its frame
+  T* fields[8] = {&capsule.length, &capsule.cap_a, &capsule.cap_b, &capsule.rax,
+                  &capsule.rbx,    &capsule.ray,   &capsule.rby,   &capsule.bulge};
+  for (int k = 0; k < 8; ++k) *fields[k] = scalars[k];
+  const T& length = capsule.length;
   const T &ox = o[0], &oy = o[1], &oz = o[2], &dx = d[0], &dy = d[1], &dz = d[2];
   const T d_o = dx * ox + dy * oy + dz * oz;
   const T denom = T(1.0) - dz * dz;
@@ -56,11 +59,10 @@ T RayCapsuleDistance(const T* o, const T* d, const T* scalars, T* mean_radius) {
   bool clamped = false;
   if (s < T(0.0)) { s = T(0.0); clamped = true; }
   if (s > length) { s = length; clamped = true; }
-  const T f = s / length;
-  const T grow = T(1.0) + bulge * T(4.0) * f * (T(1.0) - f);  // SegmentFrame::Radii
-  const T rx = (rax + (rbx - rax) * f) * grow, ry = (ray + (rby - ray) * f) * grow;
+  T rx, ry;
+  capsule.Radii(s / length, &rx, &ry);
   const T qz0 = oz - s;
-  const T inv_cap = clamped ? T(1.0) / (qz0 < T(0.0) ? cap_a : cap_b) : T(0.0);
+  const T inv_cap = clamped ? T(1.0) / (qz0 < T(0.0) ? capsule.cap_a : capsule.cap_b) : T(0.0);
   const T av[3] = {ox / rx, oy / ry, qz0 * inv_cap}, bv[3] = {dx / rx, dy / ry, dz * inv_cap};
   const T tau = -(av[0] * bv[0] + av[1] * bv[1] + av[2] * bv[2]) / (bv[0] * bv[0] + bv[1] * bv[1] + bv[2] * bv[2] + T(1e-12));
   const T q[3] = {av[0] + tau * bv[0], av[1] + tau * bv[1], av[2] + tau * bv[2]};
@@ -147,10 +149,7 @@ void SegmentCapsuleCost::Capsule(T const* const* p, T* values) const {
     const std::size_t next = 2 + chain_joints_.size();
     const T* shape = p[next];
     T length[kNumBodySegments], girth[kNumBodySegments];
-    for (int s = 0; s < kNumBodySegments; ++s) {
-      length[s] = shape[kSegmentGroup[s]];
-      girth[s] = shape[kNumShapeGroups + kSegmentGroup[s]];
-    }
+    ShapeArrays(shape, length, girth);
     RestPositions(body_, length, girth, &rest);
     const T fixed_skirt[2] = {T(shape_.skirt_values[0]), T(shape_.skirt_values[1])};
     const T* skirt = shape_.skirt ? p[next + 1] : fixed_skirt;
@@ -175,15 +174,13 @@ template <int N>
 void SegmentCapsuleCost::DifferentiateCapsule(double const* const* parameters, CapsuleValues* values,
                                               CapsuleJacobian* jacobian) const {
   using Jet = ceres::Jet<double, N>;
-  std::vector<std::vector<Jet>> blocks;
+  std::array<Jet, N> all;  // every parameter, slot by slot
   std::vector<const Jet*> pointers;
   int slot = 0;
   for (std::size_t b = 0; b < parameter_block_sizes().size(); ++b) {
-    std::vector<Jet> block;
-    for (int k = 0; k < parameter_block_sizes()[b]; ++k) block.emplace_back(parameters[b][k], slot++);
-    blocks.push_back(std::move(block));
+    pointers.push_back(&all[slot]);
+    for (int k = 0; k < parameter_block_sizes()[b]; ++k, ++slot) all[slot] = Jet(parameters[b][k], slot);
   }
-  for (const auto& block : blocks) pointers.push_back(block.data());
   Jet capsule[kNumCapsuleValues];
   Capsule<Jet>(pointers.data(), capsule);
   for (int i = 0; i < kNumCapsuleValues; ++i) {

@@ -214,10 +214,6 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
       if (coarse && !IsCoarseSegment(s)) continue;
       for (int kind = 0; kind < 2; ++kind) {
         if (kind == 1 && (assigned[s].empty() || options.image_to_model_weight <= 0)) continue;
-        // Small segments (head, neck, hands, feet) get every other sample.
-        const bool small = s == int(BodySegment::kHead) || s == int(BodySegment::kNeck) ||
-                           s == int(BodySegment::kLeftHand) || s == int(BodySegment::kRightHand) ||
-                           s == int(BodySegment::kLeftFoot) || s == int(BodySegment::kRightFoot);
         // The costs, with their Jacobians by hand (segment_costs.h).
         ti::SegmentShapeBlocks shape;
         shape.shape = fit_shape;
@@ -234,6 +230,10 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
         if (shape.skirt) blocks.push_back(fp->skirt);
         if (shape.section) blocks.push_back(fp->section);
         if (kind == 0) {
+          // Small segments (head, neck, hands, feet) get every other sample.
+          const bool small = s == int(BodySegment::kHead) || s == int(BodySegment::kNeck) ||
+                             s == int(BodySegment::kLeftHand) || s == int(BodySegment::kRightHand) ||
+                             s == int(BodySegment::kLeftFoot) || s == int(BodySegment::kRightFoot);
           std::vector<SurfaceCoord> samples;
           const auto& all = body.sample_coords();
           for (std::size_t i = 0; i < all.size(); i += small ? 2 : 1) samples.push_back(all[i]);
