@@ -11,6 +11,19 @@
 namespace confluent {
 using Eigen::Vector3d;
 
+namespace {
+
+const char* LimbSearchName(LimbSearch search) { return search == LimbSearch::kRan ? "ran" : "skipped"; }
+
+LimbSearch ParseLimbSearch(const std::string& name, const std::string& path) {
+  if (name.empty()) return LimbSearch::kNotTriggered;
+  if (name == "ran") return LimbSearch::kRan;
+  if (name == "skipped") return LimbSearch::kSkipped;
+  throw InputError(path, "limb_search is '" + name + "', expected 'ran' or 'skipped'");
+}
+
+}  // namespace
+
 void WritePosesJson(const std::string& path, const BodyTemplate& body, const BodyShape& shape,
                     const std::vector<std::string>& camera_names, const std::vector<TrackedFrame>& frames, double fps) {
   using nlohmann::json;
@@ -78,6 +91,10 @@ void WritePosesJson(const std::string& path, const BodyTemplate& body, const Bod
                  {"seconds", f.fit.seconds}};
     jf["seconds"] = f.seconds;
     jf["cpu_seconds"] = f.cpu_seconds;
+    if (f.limb_search != LimbSearch::kNotTriggered) jf["limb_search"] = LimbSearchName(f.limb_search);
+    if (f.fruitless_search.pending())
+      jf["fruitless_limb_search"] = {{"mean_iou", f.fruitless_search.mean_iou},
+                                     {"mean_contour_px", f.fruitless_search.mean_contour_px}};
     list.push_back(jf);
   }
   root["frames"] = list;
@@ -118,6 +135,11 @@ PosesFile ReadPosesJson(const std::string& path, const BodyTemplate& body, const
       f.flags = jf.value("flags", std::vector<std::string>{});
       f.seconds = jf.value("seconds", 0.0);
       f.cpu_seconds = jf.value("cpu_seconds", 0.0);
+      f.limb_search = ParseLimbSearch(jf.value("limb_search", std::string()), path);
+      if (jf.contains("fruitless_limb_search")) {
+        f.fruitless_search.mean_iou = jf["fruitless_limb_search"].at("mean_iou").get<double>();
+        f.fruitless_search.mean_contour_px = jf["fruitless_limb_search"].at("mean_contour_px").get<double>();
+      }
       f.camera_iou.assign(camera_names.size(), -1.0);
       if (jf.contains("camera_iou"))
         for (std::size_t c = 0; c < camera_names.size(); ++c)

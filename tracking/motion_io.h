@@ -12,7 +12,8 @@ namespace confluent {
 
 // Writes poses.json: joint names and parents, DOF layout with limits, fitted shape, and per
 // frame the root, joint angles (radians), local rotations (w x y z), world joint positions
-// (m), overlap per camera and flags. `camera_names` labels TrackedFrame::camera_iou.
+// (m), overlap per camera, flags and what the lost-limb search did (the tracking state a resumed
+// run needs). `camera_names` labels TrackedFrame::camera_iou.
 void WritePosesJson(const std::string& path, const BodyTemplate& body, const BodyShape& shape,
                     const std::vector<std::string>& camera_names, const std::vector<TrackedFrame>& frames, double fps);
 

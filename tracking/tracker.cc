@@ -165,6 +165,9 @@ void TrackerOptions::Check() const {
                 "in [0, 1)");
   RequireOption(limb_search_contour_rise == 0 || limb_search_contour_rise > 1, owner + "limb_search_contour_rise",
                 limb_search_contour_rise, "0 or > 1");
+  RequireOption(limb_search_repeat_drop >= 0 && limb_search_repeat_drop < 1, owner + "limb_search_repeat_drop",
+                limb_search_repeat_drop, "in [0, 1)");
+  RequireOption(limb_search_repeat_rise >= 1, owner + "limb_search_repeat_rise", limb_search_repeat_rise, ">= 1");
   RequireOption(limb_fits >= 1 && limb_fits <= 16, owner + "limb_fits", limb_fits, "in [1, 16]");
   RequireOption(limb_fits_init >= 1 && limb_fits_init <= 16, owner + "limb_fits_init", limb_fits_init, "in [1, 16]");
   RequireOption(init_shape_prior_weight >= 0, owner + "init_shape_prior_weight", init_shape_prior_weight, ">= 0");
@@ -413,6 +416,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   contour_history_.clear();
   replaced_joints_.clear();
   last_mask_hashes_.clear();
+  fruitless_search_ = {};
   if (!placement_.ok) {
     result.flags.push_back("no_hull");
     return result;
@@ -462,6 +466,7 @@ void Tracker::Resume(const BodyShape& shape, const std::vector<TemplatePose>& re
   contour_history_ = recent_contour_px;
   replaced_joints_.clear();
   last_mask_hashes_.clear();
+  fruitless_search_ = {};
   initialized_ = true;
 }
 
@@ -484,6 +489,7 @@ void Tracker::ResumeAfter(const BodyShape& shape, const std::vector<TrackedFrame
   if (poses.empty()) throw std::invalid_argument("Tracker::ResumeAfter: no tracked frame before");
   Resume(shape, poses, ious, contours);
   replaced_joints_ = ReplacedLimbJoints(last->flags);
+  fruitless_search_ = last->fruitless_search;
   for (const Image& m : last_masks) last_mask_hashes_.push_back(HashMask(m));
 }
 
@@ -501,6 +507,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
     result.pose = history_.back();
     result.flags.push_back(kRepeatedFrameFlag);
     Evaluate(shape_, masks, use, &result);
+    result.fruitless_search = fruitless_search_;
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     return result;
@@ -559,12 +566,26 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
   // unexplained.
   const bool contour_rise = options_.limb_search_contour_rise > 0 && contour_history_.size() >= 3 &&
                             result.fit.mean_contour_px > options_.limb_search_contour_rise * Median(contour_history_);
-  if (options_.limb_search && (contour_rise || result.mean_iou < Median(window) - options_.limb_search_drop)) {
+  const bool triggered =
+      options_.limb_search && (contour_rise || result.mean_iou < Median(window) - options_.limb_search_drop);
+  const bool no_worse_than_fruitless =
+      fruitless_search_.pending() &&
+      result.mean_iou >= fruitless_search_.mean_iou - options_.limb_search_repeat_drop &&
+      result.fit.mean_contour_px <= options_.limb_search_repeat_rise * fruitless_search_.mean_contour_px;
+  if (triggered && !no_worse_than_fruitless) {
+    const std::size_t flags_before = result.flags.size();
+    const FruitlessLimbSearch searched_at{result.mean_iou, result.fit.mean_contour_px};
     SearchLimbs(masks, use, observations, options_.limb_fits, &result);
     SettleLimbsByLandmarks(masks, use, observations, &result);
-  } else if (options_.landmark_check_every > 0 && frame % options_.landmark_check_every == 0) {
-    SettleLimbsByLandmarks(masks, use, observations, &result);
+    result.limb_search = LimbSearch::kRan;
+    fruitless_search_ = result.flags.size() == flags_before ? searched_at : FruitlessLimbSearch{};
+  } else {
+    if (triggered) result.limb_search = LimbSearch::kSkipped;
+    else fruitless_search_ = {};
+    if (options_.landmark_check_every > 0 && frame % options_.landmark_check_every == 0)
+      SettleLimbsByLandmarks(masks, use, observations, &result);
   }
+  result.fruitless_search = fruitless_search_;
   history_.push_back(result.pose);
   if (history_.size() > 4) history_.erase(history_.begin());
   replaced_joints_ = ReplacedLimbJoints(result.flags);

@@ -81,6 +81,13 @@ struct TrackerOptions {
   // ... and when the fit's mean contour residual (SilhouetteFitSummary::mean_contour_px) exceeds
   // this multiple of its median over the last kIouWindow frames (0: never).
   double limb_search_contour_rise = 1.3;
+  // A search that keeps the pose is not run again on the frames after it while they are no worse
+  // than the frame it ran on: until a frame's mean IoU is `limb_search_repeat_drop` lower or its
+  // contour residual `limb_search_repeat_rise` times higher (or a frame no longer triggers it). A
+  // slow decline (the demo's arms rising: 0.945 -> 0.907 over 9 frames) lags the medians, and
+  // the search ran on 18 frames there, 80 s of CPU, and kept the pose on every one.
+  double limb_search_repeat_drop = 0.01;
+  double limb_search_repeat_rise = 1.15;
   int limb_fits = 2;
   int limb_fits_init = 4;          // at initialisation (once per run), more of them are fitted
   double limb_min_gain = 0.005;
@@ -115,6 +122,16 @@ struct TrackerOptions {
 // still be kept (TrackerOptions::landmark_full_tolerance_m).
 double LandmarkIouTolerance(const TrackerOptions& options, double disagreement_m);
 
+// What the lost-limb search did on a frame.
+enum class LimbSearch { kNotTriggered, kRan, kSkipped };  // kSkipped: no worse than a fruitless one before
+
+// The frame on which the last lost-limb search kept the pose (TrackerOptions::limb_search_repeat_drop).
+struct FruitlessLimbSearch {
+  double mean_iou = -1.0;  // < 0: none pending
+  double mean_contour_px = 0.0;
+  bool pending() const { return mean_iou >= 0.0; }
+};
+
 // Result of one frame.
 struct TrackedFrame {
   int frame = 0;
@@ -126,6 +143,8 @@ struct TrackedFrame {
   std::vector<std::string> flags;        // "duplicate", "empty_mask:<cam>", "recovered", "bad" ...
   double seconds = 0.0;                  // wall-clock time of the frame
   double cpu_seconds = 0.0;              // process CPU time of the frame (all threads)
+  LimbSearch limb_search = LimbSearch::kNotTriggered;
+  FruitlessLimbSearch fruitless_search;  // as it stands after this frame (the state a resumed run needs)
 };
 
 // Whether `frame` repeated the masks of the one before (flag "duplicate"): Track kept the pose and
@@ -211,6 +230,7 @@ class Tracker {
   double init_rest_prior_scale_ = 0.0;
   std::vector<std::size_t> last_mask_hashes_;
   LandmarkSource landmarks_;
+  FruitlessLimbSearch fruitless_search_;
 };
 
 }  // namespace confluent

@@ -1,5 +1,5 @@
 // poses.json round trip of what `confluent track` reports per frame from it: the fit summary,
-// the wall-clock and CPU seconds, the flags and the per-camera overlap.
+// the wall-clock and CPU seconds, the flags, the per-camera overlap and the lost-limb search's state.
 #include "tracking/motion_io.h"
 
 #include <gtest/gtest.h>
@@ -27,6 +27,8 @@ TEST(PosesJson, PerFrameFitAndTimesRoundTrip) {
   frame.fit.mean_contour_px = 1.25;
   frame.fit.num_cameras = 2;
   frame.fit.seconds = 0.33;
+  frame.limb_search = LimbSearch::kSkipped;
+  frame.fruitless_search = {0.93, 0.47};
   testing::TempDir dir;
   const std::string path = dir / "poses.json";
   WritePosesJson(path, body, BodyShape(), {"a", "b", "c"}, {frame}, 30.0);
@@ -45,6 +47,36 @@ TEST(PosesJson, PerFrameFitAndTimesRoundTrip) {
   EXPECT_EQ(read.fit.mean_contour_px, frame.fit.mean_contour_px);
   EXPECT_EQ(read.fit.num_cameras, frame.fit.num_cameras);
   EXPECT_EQ(read.fit.seconds, frame.fit.seconds);
+  EXPECT_EQ(read.limb_search, LimbSearch::kSkipped);
+  EXPECT_EQ(read.fruitless_search.mean_iou, 0.93);
+  EXPECT_EQ(read.fruitless_search.mean_contour_px, 0.47);
+}
+
+// A frame where the search did not run and none is pending writes neither, and reads back so;
+// an unknown value is refused, naming the file.
+TEST(PosesJson, LimbSearchStateDefaultsAndBadValues) {
+  const BodyTemplate body;
+  TrackedFrame frame;
+  testing::TempDir dir;
+  const std::string path = dir / "poses.json";
+  WritePosesJson(path, body, BodyShape(), {}, {frame}, 25.0);
+  const nlohmann::json written = nlohmann::json::parse(ReadTextFile(path));
+  EXPECT_FALSE(written["frames"][0].contains("limb_search"));
+  EXPECT_FALSE(written["frames"][0].contains("fruitless_limb_search"));
+  const TrackedFrame read = ReadPosesJson(path, body, {}).frames.at(0);
+  EXPECT_EQ(read.limb_search, LimbSearch::kNotTriggered);
+  EXPECT_FALSE(read.fruitless_search.pending());
+
+  nlohmann::json bad = written;
+  bad["frames"][0]["limb_search"] = "sometimes";
+  WriteTextFile(path, bad.dump());
+  try {
+    ReadPosesJson(path, body, {});
+    FAIL() << "an unknown limb_search value was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("sometimes"), std::string::npos) << e.what();
+  }
 }
 
 // A poses.json of the 37-DOF template (a run tracked before the neck and the wrists got their
