@@ -136,10 +136,12 @@ TrackingReport ReportTracking(const RunInputs& inputs, const BodyTemplate& body,
 
   const std::vector<double> tracked_seconds(frame_seconds.begin() + (frame_seconds.size() > 1 ? 1 : 0), frame_seconds.end());
   double iou_sum = 0;
-  int flagged = 0;
+  int flagged = 0, searched = 0, search_skipped = 0;
   for (const TrackedFrame& r : results) {
     iou_sum += r.mean_iou;
     flagged += std::any_of(r.flags.begin(), r.flags.end(), [](const std::string& f) { return f != "initialized"; });
+    searched += r.limb_search == LimbSearch::kRan;
+    search_skipped += r.limb_search == LimbSearch::kSkipped;
   }
   nlohmann::json& summary = report.summary;
   const double mean_iou = iou_sum / std::max<std::size_t>(1, results.size());
@@ -149,12 +151,20 @@ TrackingReport ReportTracking(const RunInputs& inputs, const BodyTemplate& body,
   summary["median_track_seconds"] = Percentile(tracked_seconds, 0.5);
   summary["median_track_cpu_seconds"] = Percentile(tracked_cpu, 0.5);
   summary["flagged_frames"] = flagged;
+  summary["limb_search_frames"] = searched;
+  summary["limb_search_skipped_frames"] = search_skipped;
   char line[512];
   std::snprintf(line, sizeof line,
                 "tracked %zu frames: mean IoU %.3f (tracked cameras), init %.2fs, median %.3fs per frame (cpu %.3fs), %d flagged",
                 results.size(), mean_iou, frame_seconds.empty() ? 0.0 : frame_seconds.front(),
                 Percentile(tracked_seconds, 0.5), Percentile(tracked_cpu, 0.5), flagged);
   report.summary_lines.push_back(line);
+  if (searched + search_skipped > 0) {
+    std::snprintf(line, sizeof line,
+                  "lost-limb search: ran on %d frame(s), skipped on %d no worse than a fruitless search before", searched,
+                  search_skipped);
+    report.summary_lines.push_back(line);
+  }
   if (!heldout_ious.empty()) {
     const double mean = std::accumulate(heldout_ious.begin(), heldout_ious.end(), 0.0) / heldout_ious.size();
     const double minimum = *std::min_element(heldout_ious.begin(), heldout_ious.end());

@@ -36,6 +36,12 @@ TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
   tracker = TrackerOptions();
   tracker.init_rest_pull_min_iou_gain = 1;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.init_rest_pull_min_iou_gain = 1: must be in [0, 1)");
+  tracker = TrackerOptions();
+  tracker.limb_search_repeat_rise = 0.9;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.limb_search_repeat_rise = 0.9: must be >= 1");
+  tracker = TrackerOptions();
+  tracker.limb_search_repeat_drop = -0.1;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.limb_search_repeat_drop = -0.1: must be in [0, 1)");
   ScanRegistrationOptions registration;
   registration.min_pair_distance_m = 0.2;
   registration.max_pair_distance_m = 0.1;

@@ -37,6 +37,9 @@ TEST(TrackCommand, TracksTheTinyStudioCapture) {
   const nlohmann::json poses = nlohmann::json::parse(ReadTextFile(run + "/poses.json"));
   ASSERT_EQ(poses.at("frames").size(), 10u);
   EXPECT_EQ(poses.at("frames")[3].at("joint_positions").size(), 22u);
+  int searched = 0;  // the summary counts what the frames record
+  for (const nlohmann::json& frame : poses.at("frames")) searched += frame.value("limb_search", std::string()) == "ran";
+  EXPECT_EQ(summary.at("limb_search_frames").get<int>(), searched);
   EXPECT_TRUE(poses.at("shape").at("length_scale").contains("left_forearm"));
   BvhReadOptions options;
   options.scale = 0.01;
