@@ -86,5 +86,78 @@ TEST(ImageMetricsTest, UnionAndDifference) {
   EXPECT_NEAR(d.at<float>(1, 1), 0.2f, 1e-6);
 }
 
+// SSIM inside a mask uses the 11x11 windows around the masked pixels as a whole-image SSIM does:
+// pixels up to 5 px outside the mask's box take part, farther ones do not, also where the box
+// touches the image border (reflected there).
+TEST(MaskedSsimTest, TheWindowsSeeFiveSurroundingPixelsAndNoMore) {
+  const Image a = Noise(64, 48, 5), b = Noise(64, 48, 6);
+  for (const auto& [x0, y0] : {std::pair{20, 15}, std::pair{0, 0}}) {  // inside, and at the corner
+    Image mask(64, 48, 1);
+    for (int y = y0; y < y0 + 12; ++y)
+      for (int x = x0; x < x0 + 16; ++x) mask.at<std::uint8_t>(x, y) = 255;
+    const double ssim = MaskedSsim(a, b, mask);
+    auto with_pixel_changed = [&](int x, int y) {
+      Image changed = b;
+      for (int c = 0; c < 3; ++c) changed.at<std::uint8_t>(x, y, c) ^= 0x80;
+      return MaskedSsim(a, changed, mask);
+    };
+    EXPECT_NE(with_pixel_changed(x0 + 16 + 4, y0 + 5), ssim) << "4 px right of the box";
+    EXPECT_NE(with_pixel_changed(x0 + 8, y0 + 12 + 4), ssim) << "4 px below the box";
+    EXPECT_EQ(with_pixel_changed(x0 + 16 + 6, y0 + 5), ssim) << "6 px right of the box";
+    EXPECT_EQ(with_pixel_changed(x0 + 8, y0 + 12 + 6), ssim) << "6 px below the box";
+    // A mask's SSIM is the mean of one SSIM map over its pixels, each pixel's value found by
+    // masking that pixel alone (its box is then 1x1, and everything around it is context).
+    double sum = 0.0;
+    int n = 0;
+    for (int y = y0; y < y0 + 12; y += 5)
+      for (int x = x0; x < x0 + 16; x += 5) {
+        Image one(64, 48, 1);
+        one.at<std::uint8_t>(x, y) = 255;
+        sum += MaskedSsim(a, b, one);
+        ++n;
+      }
+    Image sparse(64, 48, 1);
+    for (int y = y0; y < y0 + 12; y += 5)
+      for (int x = x0; x < x0 + 16; x += 5) sparse.at<std::uint8_t>(x, y) = 255;
+    EXPECT_NEAR(MaskedSsim(a, b, sparse), sum / n, 1e-12);
+  }
+}
+
+// The metrics read 16-bit and float images on the same [0, 1] scale as 8-bit ones, a 4-channel
+// image by its first three channels, and a mask by its first channel.
+TEST(ImageMetricsTest, PixelTypesChannelsAndMaskChannels) {
+  const Image a8 = Noise(16, 12, 7), b8 = Noise(16, 12, 8);
+  Image a16(16, 12, 3, PixelType::kUInt16), b4(16, 12, 4);
+  for (std::size_t i = 0; i < a8.data.size(); ++i) a16.ptr<std::uint16_t>()[i] = static_cast<std::uint16_t>(a8.data[i] * 257);
+  for (int p = 0; p < 16 * 12; ++p) {
+    for (int c = 0; c < 3; ++c) b4.data[4 * p + c] = b8.data[3 * p + c];
+    b4.data[4 * p + 3] = static_cast<std::uint8_t>(p);  // alpha: not compared
+  }
+  Image mask(16, 12, 2);
+  for (int p = 0; p < 16 * 12; ++p) {
+    mask.data[2 * p] = p % 3 == 0 ? 255 : 0;
+    mask.data[2 * p + 1] = 255;  // second channel: ignored
+  }
+  Image mask1(16, 12, 1);
+  for (int p = 0; p < 16 * 12; ++p) mask1.data[p] = p % 3 == 0 ? 255 : 0;
+  EXPECT_NEAR(MaskedPsnr(a16, b4, mask), MaskedPsnr(a8, b8, mask1), 1e-9);
+  EXPECT_NEAR(MaskedSsim(a16, b4, mask), MaskedSsim(a8, b8, mask1), 1e-9);
+  // By hand: the masked pixels' squared differences over 3 channels.
+  double sum = 0.0;
+  int n = 0;
+  for (int p = 0; p < 16 * 12; p += 3)
+    for (int c = 0; c < 3; ++c, ++n) {
+      const double d = (a8.data[3 * p + c] - b8.data[3 * p + c]) / 255.0;
+      sum += d * d;
+    }
+  EXPECT_NEAR(MaskedPsnr(a8, b8, mask1), -10.0 * std::log10(sum / n), 1e-9);
+  const Image d = AbsoluteDifference(a16, b4);
+  EXPECT_NEAR(d.at<float>(5, 7),
+              (std::abs(a8.at<std::uint8_t>(5, 7, 0) - b8.at<std::uint8_t>(5, 7, 0)) +
+               std::abs(a8.at<std::uint8_t>(5, 7, 1) - b8.at<std::uint8_t>(5, 7, 1)) +
+               std::abs(a8.at<std::uint8_t>(5, 7, 2) - b8.at<std::uint8_t>(5, 7, 2))) / (3 * 255.0),
+              1e-6);
+}
+
 }  // namespace
 }  // namespace confluent
