@@ -13,8 +13,9 @@ step() {
 # about 25 min together on 2 cores). They run unsanitized in ./dev test below, and sanitized
 # in `./dev test --sanitize` by hand.
 # The plate-free silhouette tests (issue 20) are among them: 1 to 7.5 min each sanitized; so is
-# LandmarkLimbs' tracker test (3.2 min sanitized, 24 s unsanitized).
-heavy='^(SambaRealMotion|TrackerResume|GirthInflation|SilhouetteFit|SkirtFit|LimbRecovery|LandmarkLimbs|ScanCorrespondence|ScanRegistration|Calibrate|RealSilhouettes|RealCheckerboard|CorrespondencePlacement|TemplateMotion|TrackCommand|PlateFree)\.|^SilhouettesCli\.(TinySynthCapture|WithoutAnyPlate|RunWarnsBefore|WithoutThePersonPrior)'
+# LandmarkLimbs' tracker test (3.2 min sanitized, 24 s unsanitized) and LimbSearchRepeat's three
+# (52-97 s each sanitized, 5-11 s unsanitized).
+heavy='^(SambaRealMotion|TrackerResume|GirthInflation|SilhouetteFit|SkirtFit|LimbRecovery|LimbSearchRepeat|LandmarkLimbs|ScanCorrespondence|ScanRegistration|Calibrate|RealSilhouettes|RealCheckerboard|CorrespondencePlacement|TemplateMotion|TrackCommand|PlateFree)\.|^SilhouettesCli\.(TinySynthCapture|WithoutAnyPlate|RunWarnsBefore|WithoutThePersonPrior)'
 step ./dev test --sanitize -L unit -E "$heavy"
 step ./dev fuzz --seconds 15 --seed 1
 # The release build (its own step, for its time). The demo itself runs in ./dev test below
