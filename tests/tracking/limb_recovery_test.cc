@@ -15,14 +15,8 @@
 namespace confluent {
 namespace {
 
-// The shoulder rotation that turns the generic upper arm from rest to `direction` (chest frame).
-std::array<double, 3> ArmTowards(const BodyTemplate& body, int shoulder, const Eigen::Vector3d& direction) {
-  const auto& rest = body.generic_rest();
-  const Eigen::AngleAxisd turn(
-      Eigen::Quaterniond::FromTwoVectors((rest[shoulder + 1] - rest[shoulder]).normalized(), direction.normalized()));
-  const Eigen::Vector3d v = turn.angle() * turn.axis();
-  return {v.x(), v.y(), v.z()};
-}
+using testing::ArmTowards;
+using testing::WithLeftArmFolded;
 
 double JointError(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& truth,
                   const TrackedFrame& tracked, int joint) {
@@ -52,13 +46,6 @@ TrackedFrame TrackAfterTwoFrames(const Rig& rig, const BodyShape& shape, const T
   for (TrackedFrame& f : before) f.mean_iou = 0.95;
   tracker.ResumeAfter(shape, before, {});
   return tracker.Track(10, masks);
-}
-
-// `pose` with the left arm folded down across the chest (seen inside the torso from the front).
-TemplatePose WithLeftArmFolded(const BodyTemplate& body, TemplatePose pose) {
-  pose.dofs[kJointLeftShoulder] = ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-0.2, 0.3, -1.0));
-  pose.dofs[kJointLeftElbow] = {1.9, 0, 0};
-  return pose;
 }
 
 // Arms beside the body; from frame 4 the left arm rises over the head within 4 frames.

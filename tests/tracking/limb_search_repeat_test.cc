@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "tracking/limb_hypotheses.h"
 #include "tracking/motion_io.h"
 #include "tracking/tracker.h"
 #include "tests/support/camera_ring.h"
@@ -34,19 +33,8 @@ TemplatePose ArmPose(const BodyTemplate& body, bool forward, double shift_m) {
   TemplatePose pose;
   pose.root_translation = Eigen::Vector3d(shift_m, 0.0, 0.0);
   pose.root_rotation = Eigen::Vector3d(0, 0, 0.3);
-  const auto towards = [&](const Eigen::Vector3d& direction) {
-    const auto& rest = body.generic_rest();
-    const Eigen::AngleAxisd turn(Eigen::Quaterniond::FromTwoVectors(
-        (rest[kJointLeftShoulder + 1] - rest[kJointLeftShoulder]).normalized(), direction.normalized()));
-    const Eigen::Vector3d v = turn.angle() * turn.axis();
-    return std::array<double, 3>{v.x(), v.y(), v.z()};
-  };
-  if (forward) {
-    pose.dofs[kJointLeftShoulder] = towards(Eigen::Vector3d(-0.1, 1.0, 0.0));
-  } else {
-    pose.dofs[kJointLeftShoulder] = towards(Eigen::Vector3d(-0.2, 0.3, -1.0));
-    pose.dofs[kJointLeftElbow] = {1.9, 0, 0};
-  }
+  if (!forward) return testing::WithLeftArmFolded(body, pose);
+  pose.dofs[kJointLeftShoulder] = testing::ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-0.1, 1.0, 0.0));
   return pose;
 }
 
@@ -83,7 +71,7 @@ TEST(LimbSearchRepeat, AFruitlessSearchIsNotRepeatedUntilAFrameIsWorse) {
   EXPECT_EQ(first.fruitless_search.mean_iou, first.mean_iou);
   EXPECT_EQ(first.fruitless_search.mean_contour_px, first.fit.mean_contour_px);
   // Frame 11: the performer moved 3 mm, the frame is as good as frame 10: not searched again.
-  const PatchedScene& s = scene;  // short names below
+  const PatchedScene& s = scene;
   const TrackedFrame second = tracker.Track(11, MasksWithCornerPatch(s.body, s.shape, ArmPose(s.body, false, 0.003), s.rig, 40));
   EXPECT_EQ(second.limb_search, LimbSearch::kSkipped);
   EXPECT_NEAR(second.mean_iou, first.mean_iou, 0.01);
