@@ -40,7 +40,8 @@ constexpr JointPair kPairs[] = {
 };
 static_assert(2 * std::size(kPairs) == kTriangulatedJoints);
 constexpr int kNose = 0;
-constexpr int kLeftHeel = 29, kLeftToe = 31;  // the right ones follow
+constexpr int kLeftPinky = 17, kLeftIndex = 19;  // the knuckles; the right ones follow
+constexpr int kLeftHeel = 29, kLeftToe = 31;
 
 // The landmark on the other side of the body (the nose has none).
 int Twin(int landmark) { return landmark == kNose ? kNose : (landmark % 2 ? landmark + 1 : landmark - 1); }
@@ -244,6 +245,13 @@ LandmarkJoints TriangulateLandmarkJoints(const Rig& rig, const std::vector<const
       out.cameras[joint] = c.count;
       out.rms_px[joint] = c.rms_px;
     }
+  }
+  for (int side = 0; side < 2; ++side) {
+    const Consensus pinky = place(kLeftPinky, side), index = place(kLeftIndex, side);
+    if (!pinky.count || !index.count) continue;
+    const int hand = (side == 0) == a_is_left ? 0 : 1;
+    out.knuckles[hand] = 0.5 * (pinky.point[0] + index.point[0]);
+    out.knuckle_cameras[hand] = std::min(pinky.count, index.count);
   }
   return out;
 }

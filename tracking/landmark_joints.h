@@ -38,11 +38,18 @@ struct LandmarkJoints {
   std::vector<Eigen::Vector3d> position;  // kNumTemplateJoints, world metres (zero where unknown)
   std::vector<int> cameras;               // per joint: cameras that agree (0 = unknown)
   std::vector<double> rms_px;             // per joint: reprojection rms over those cameras
+  // Per hand (0 = the person's left, 1 = right): the midpoint of the index and pinky knuckles
+  // (BlazePose 19/17 and 20/18), which points the hand from the wrist (BlazePose places it 4-13
+  // degrees off the true hand's direction on the suite's 512x384 frames); cameras that agree on
+  // both knuckles (the fewer of the two; 0 = unknown).
+  std::array<Eigen::Vector3d, 2> knuckles{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  std::array<int, 2> knuckle_cameras{0, 0};
   bool known(int joint) const { return joint < static_cast<int>(cameras.size()) && cameras[joint] > 0; }
   int num_known() const;
 };
 
-// Triangulates the limb joints (shoulders, elbows, wrists, hips, knees, ankles, toes) from
+// Triangulates the limb joints (shoulders, elbows, wrists, hips, knees, ankles, toes) and the
+// hands' knuckles from
 // `views[c]` (one per rig camera; null where a camera has none; world z up). Each camera's left
 // and right are settled on the shoulders and hips (a camera may swap them); which side is the
 // person's left follows from where the nose and the toes point (what most cameras say when

@@ -1,6 +1,7 @@
 #include "tracking/landmark_limbs.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "tracking/pose_from_joints.h"
@@ -47,6 +48,44 @@ std::vector<TemplatePose> LimbsFromLandmarks(const BodyTemplate& body, const Bod
     out.push_back(turned(joints[chain.root] + upper * (landmarks.position[chain.middle] - from).normalized()));
   }
   return out;
+}
+
+namespace {
+
+// The landmarks' hand direction (unit) for `arm`, from their wrist to their knuckles; zero when
+// unknown or unreliable (HandDisagreementRad).
+Vector3d LandmarkHandDirection(const std::vector<Vector3d>& joints, const LandmarkJoints& landmarks, Limb arm,
+                               double max_wrist_gap_m) {
+  const int hand = arm == Limb::kLeftArm ? 0 : 1;
+  const int wrist = LimbJoints(arm).end;
+  if (!IsArm(arm) || landmarks.knuckle_cameras[hand] <= 0 || !landmarks.known(wrist) ||
+      (landmarks.position[wrist] - joints[wrist]).norm() > max_wrist_gap_m)
+    return Vector3d::Zero();
+  const Vector3d d = landmarks.knuckles[hand] - landmarks.position[wrist];
+  constexpr double kMinHandM = 0.03;  // closer knuckles give no direction
+  return d.norm() < kMinHandM ? Vector3d::Zero() : Vector3d(d.normalized());
+}
+
+}  // namespace
+
+double HandDisagreementRad(const std::vector<Vector3d>& joints, const LandmarkJoints& landmarks, Limb arm,
+                           double max_wrist_gap_m) {
+  const Vector3d seen = LandmarkHandDirection(joints, landmarks, arm, max_wrist_gap_m);
+  if (seen.isZero()) return -1.0;
+  const int wrist = LimbJoints(arm).end;
+  const Vector3d hand = (joints[wrist + 1] - joints[wrist]).normalized();
+  return std::acos(std::clamp(hand.dot(seen), -1.0, 1.0));
+}
+
+std::vector<TemplatePose> HandsFromLandmarks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose,
+                                             Limb arm, const LandmarkJoints& landmarks, double max_wrist_gap_m) {
+  const std::vector<Vector3d> joints = body.JointPositions(shape, pose);
+  const Vector3d seen = LandmarkHandDirection(joints, landmarks, arm, max_wrist_gap_m);
+  if (seen.isZero()) return {};
+  const int wrist = LimbJoints(arm).end;
+  std::vector<Vector3d> targets = joints;
+  targets[wrist + 1] = joints[wrist] + (joints[wrist + 1] - joints[wrist]).norm() * seen;
+  return {FitPoseToJoints(body, shape, targets, nullptr, pose)};
 }
 
 }  // namespace confluent

@@ -28,4 +28,17 @@ bool SkirtHidesAnkle(const BodyTemplate& body, const BodyShape& shape, const Tem
 std::vector<TemplatePose> LimbsFromLandmarks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose,
                                              Limb limb, const LandmarkJoints& landmarks);
 
+// The angle (rad) between the hand of `arm` in `joints` (template order, world; wrist to hand end)
+// and the landmarks' (their wrist to their knuckles); -1 when the landmarks do not place both,
+// place the knuckles within 3 cm of the wrist (no direction), or place the wrist more than
+// `max_wrist_gap_m` from `joints`' (a detector that misplaces the wrist points the hand anywhere:
+// on the Indian dance, wrists 7-9 cm off came with hands 50-140 degrees off).
+double HandDisagreementRad(const std::vector<Eigen::Vector3d>& joints, const LandmarkJoints& landmarks, Limb arm,
+                           double max_wrist_gap_m);
+
+// `pose` with the hand of `arm` turned at the wrist to point as the landmarks' hand does (see
+// HandDisagreementRad), the rest of the body held; none when they do not place it.
+std::vector<TemplatePose> HandsFromLandmarks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose,
+                                             Limb arm, const LandmarkJoints& landmarks, double max_wrist_gap_m);
+
 }  // namespace confluent

@@ -117,6 +117,14 @@ void TrackerOptions::Check() const {
                 landmark_iou_tolerance, "in [0, 1)");
   RequireOption(landmark_full_tolerance_m > landmark_disagreement_m, owner + "landmark_full_tolerance_m",
                 landmark_full_tolerance_m, "> landmark_disagreement_m");
+  RequireOption(landmark_hand_disagreement_rad > 0, owner + "landmark_hand_disagreement_rad",
+                landmark_hand_disagreement_rad, "> 0");
+  RequireOption(landmark_hand_min_approach_rad >= 0, owner + "landmark_hand_min_approach_rad",
+                landmark_hand_min_approach_rad, ">= 0");
+  RequireOption(landmark_hand_iou_tolerance >= 0 && landmark_hand_iou_tolerance < 1,
+                owner + "landmark_hand_iou_tolerance", landmark_hand_iou_tolerance, "in [0, 1)");
+  RequireOption(landmark_hand_max_wrist_gap_m > 0, owner + "landmark_hand_max_wrist_gap_m",
+                landmark_hand_max_wrist_gap_m, "> 0");
 }
 
 Tracker::Tracker(const Rig& rig, const std::vector<bool>& excluded, const TrackerOptions& options)
@@ -217,6 +225,21 @@ void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std:
     best.flags = result->flags;
     best.flags.push_back(kLandmarksFlag + std::string(LimbName(limb)));
     *result = std::move(best);
+  }
+  const double gap = options_.landmark_hand_max_wrist_gap_m;
+  for (Limb arm : {Limb::kLeftArm, Limb::kRightArm}) {
+    const double before = HandDisagreementRad(result->joints, landmarks, arm, gap);
+    if (before < options_.landmark_hand_disagreement_rad) continue;  // agrees, or unknown
+    for (const TemplatePose& hypothesis : HandsFromLandmarks(body_, shape_, result->pose, arm, landmarks, gap)) {
+      TrackedFrame candidate = FitLimbHypothesis(hypothesis, result->frame, masks, use, observations);
+      const double after = HandDisagreementRad(candidate.joints, landmarks, arm, gap);
+      if (after > before - options_.landmark_hand_min_approach_rad ||
+          candidate.mean_iou < result->mean_iou - options_.landmark_hand_iou_tolerance)
+        continue;
+      candidate.flags = result->flags;
+      candidate.flags.push_back(kLandmarksFlag + std::string(arm == Limb::kLeftArm ? "left_hand" : "right_hand"));
+      *result = std::move(candidate);
+    }
   }
 }
 

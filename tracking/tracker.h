@@ -90,6 +90,17 @@ struct TrackerOptions {
   // distance: BlazePose's wrists lay 9-14 cm inside the forward jumps' arms held in front of the
   // chest, and turning a wrist that was 6 cm off onto them lost 0.006 of IoU (and 10 cm).
   double landmark_full_tolerance_m = 0.16;
+  // Hands: one pointing `landmark_hand_disagreement_rad` or more away from the landmarks' hand
+  // (their wrist to their knuckles) is turned at the wrist onto it and fitted again, and kept when
+  // it comes `landmark_hand_min_approach_rad` closer and the mean IoU falls by no more than
+  // `landmark_hand_iou_tolerance`. Silhouettes hardly see a hand held against the thigh: on
+  // Perfume's dance the tracked right hand swung 45 degrees towards the crotch, unflagged.
+  double landmark_hand_disagreement_rad = 0.35;
+  double landmark_hand_min_approach_rad = 0.2;
+  double landmark_hand_iou_tolerance = 0.003;
+  // ... only where the landmarks' wrist lies within this distance of the template's (else their
+  // hand's direction is not trusted).
+  double landmark_hand_max_wrist_gap_m = 0.05;
   // Besides the first frame and the lost-limb search, the landmarks are asked every this many
   // frames (0: never): a limb held wrong where the overlap does not drop (a forearm folded the
   // other way in front of the chest) is found there.
@@ -186,8 +197,8 @@ class Tracker {
   // better, flagging "limb:<name>" for each limb moved.
   void SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
                    const SilhouetteObservations& observations, int fits, TrackedFrame* result);
-  // Turns each limb of `result` that disagrees with the landmarks of its frame towards them
-  // (see TrackerOptions); nothing without a landmark source.
+  // Turns each limb of `result` that disagrees with the landmarks of its frame towards them, then
+  // each hand (see TrackerOptions); nothing without a landmark source.
   void SettleLimbsByLandmarks(const std::vector<Image>& masks, const std::vector<bool>& use,
                               const SilhouetteObservations& observations, TrackedFrame* result);
   // Grows every girth of the shape where that overlaps the masks better (TrackerOptions::girth_inflation_max).

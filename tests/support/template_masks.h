@@ -2,6 +2,7 @@
 // Ground truth for tracking tests: the template's own silhouettes in a known pose, and the poses.
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <vector>
 
@@ -9,6 +10,7 @@
 #include "core/image.h"
 #include "silhouette/overlap.h"
 #include "tracking/body_template.h"
+#include "tracking/landmark_joints.h"
 
 namespace confluent::testing {
 
@@ -19,6 +21,38 @@ inline std::vector<Image> TemplateMasks(const BodyTemplate& body, const BodyShap
   std::vector<Image> masks;
   for (const Camera& camera : rig.cameras) masks.push_back(RasterizeClosedMesh(mesh, camera));
   return masks;
+}
+
+// Per pixel, the union of the template's silhouettes in poses `a` and `b`: masks the silhouettes
+// cannot settle between the two.
+inline std::vector<Image> UnionTemplateMasks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& a,
+                                             const TemplatePose& b, const Rig& rig) {
+  std::vector<Image> masks = TemplateMasks(body, shape, a, rig);
+  const std::vector<Image> other = TemplateMasks(body, shape, b, rig);
+  for (std::size_t c = 0; c < masks.size(); ++c)
+    for (std::size_t i = 0; i < masks[c].data.size(); ++i)
+      masks[c].data[i] = std::max(masks[c].data[i], other[c].data[i]);
+  return masks;
+}
+
+// The landmark joints a perfect detector gives for the template in `pose`: its 14 limb joints,
+// and the knuckles 60% of the way along each hand.
+inline LandmarkJoints TemplateLandmarks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose) {
+  LandmarkJoints landmarks;
+  landmarks.position = body.JointPositions(shape, pose);
+  landmarks.cameras.assign(kNumTemplateJoints, 0);
+  landmarks.rms_px.assign(kNumTemplateJoints, 1.0);
+  for (int j : {kJointLeftShoulder, kJointLeftElbow, kJointLeftWrist, kJointRightShoulder, kJointRightElbow,
+                kJointRightWrist, kJointLeftHip, kJointLeftKnee, kJointLeftAnkle, kJointLeftToe, kJointRightHip,
+                kJointRightKnee, kJointRightAnkle, kJointRightToe})
+    landmarks.cameras[j] = 8;
+  for (int side = 0; side < 2; ++side) {
+    const int wrist = side ? kJointRightWrist : kJointLeftWrist;
+    landmarks.knuckles[side] =
+        landmarks.position[wrist] + 0.6 * (landmarks.position[wrist + 1] - landmarks.position[wrist]);
+    landmarks.knuckle_cameras[side] = 8;
+  }
+  return landmarks;
 }
 
 // The shoulder rotation that turns the generic upper arm from rest to `direction` (chest frame).

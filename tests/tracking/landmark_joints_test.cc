@@ -35,8 +35,13 @@ TemplatePose Reaching() {
 // The direction the body of Reaching() faces (the template faces +y at rest).
 Eigen::Vector3d Forward() { return Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()) * Eigen::Vector3d::UnitY(); }
 
-// Each camera's landmarks of `joints` (and a nose ahead of the head, heels behind the ankles),
-// with `noise_px` of Gaussian noise, all visible.
+// Where the knuckles' midpoint lies on the hand of `wrist`: 60% of the way to the hand's end.
+Eigen::Vector3d Knuckles(const std::vector<Eigen::Vector3d>& joints, int wrist) {
+  return joints[wrist] + 0.6 * (joints[wrist + 1] - joints[wrist]);
+}
+
+// Each camera's landmarks of `joints` (and the hands' knuckles, a nose ahead of the head, heels
+// behind the ankles), with `noise_px` of Gaussian noise, all visible.
 std::vector<BodyLandmarks> Project(const Rig& rig, const std::vector<Eigen::Vector3d>& joints, double noise_px) {
   std::mt19937 random(7);
   std::normal_distribution<double> noise(0.0, noise_px);
@@ -48,6 +53,12 @@ std::vector<BodyLandmarks> Project(const Rig& rig, const std::vector<Eigen::Vect
       views[c][landmark] = Eigen::Vector3f(px.x() + noise(random), px.y() + noise(random), 0.95f);
     };
     for (const auto& [joint, landmark] : kLandmarkOf) add(landmark, joints[joint]);
+    for (int side = 0; side < 2; ++side) {  // the index and pinky knuckles, 2 cm either side of the hand's axis
+      const int wrist = side ? kJointRightWrist : kJointLeftWrist;
+      const Eigen::Vector3d across = (joints[wrist + 1] - joints[wrist]).cross(Eigen::Vector3d::UnitZ()).normalized();
+      add(19 + side, Knuckles(joints, wrist) + 0.02 * across);
+      add(17 + side, Knuckles(joints, wrist) - 0.02 * across);
+    }
     add(0, joints[kJointHead] + 0.1 * Forward());
     add(29, joints[kJointLeftAnkle] - 0.06 * Forward() - Eigen::Vector3d(0, 0, 0.05));
     add(30, joints[kJointRightAnkle] - 0.06 * Forward() - Eigen::Vector3d(0, 0, 0.05));
@@ -93,6 +104,11 @@ TEST_F(Triangulation, EveryLimbJointIsPlacedFromNoisyLandmarks) {
   }
   EXPECT_FALSE(found.known(kJointHead));
   EXPECT_FALSE(found.known(kJointPelvis));
+  for (int side = 0; side < 2; ++side) {
+    const int wrist = side ? kJointRightWrist : kJointLeftWrist;
+    EXPECT_EQ(found.knuckle_cameras[side], 8);
+    EXPECT_LT((found.knuckles[side] - Knuckles(truth, wrist)).norm(), 0.02) << side;
+  }
 }
 
 TEST_F(Triangulation, CamerasThatSwapLeftAndRightOrMisplaceAWristAreOutvoted) {
@@ -105,6 +121,8 @@ TEST_F(Triangulation, CamerasThatSwapLeftAndRightOrMisplaceAWristAreOutvoted) {
   EXPECT_EQ(found.cameras[kJointLeftWrist], 7);  // camera 0 disagrees
   EXPECT_EQ(found.cameras[kJointRightElbow], 8);  // the swapped cameras agree once swapped back
   EXPECT_EQ(found.cameras[kJointLeftShoulder], 8);
+  EXPECT_LT((found.knuckles[0] - Knuckles(truth, kJointLeftWrist)).norm(), 0.02);  // the sides settled as the joints'
+  EXPECT_LT((found.knuckles[1] - Knuckles(truth, kJointRightWrist)).norm(), 0.02);
 }
 
 // A detector that sees the back takes it for the front: five cameras of eight swap the sides.
@@ -143,6 +161,11 @@ TEST_F(Triangulation, AJointFewCamerasSeeOrAgreeOnStaysUnknown) {
   EXPECT_TRUE(found.known(kJointLeftAnkle));
   EXPECT_TRUE(found.known(kJointLeftWrist));
   EXPECT_EQ(found.cameras[kJointLeftWrist], 7);
+  // The left hand's pinky hidden from all but two cameras: its knuckles stay unknown.
+  for (int c = 2; c < 8; ++c) views[c][17].z() = 0.1f;
+  const LandmarkJoints without_pinky = TriangulateLandmarkJoints(rig, Pointers(views));
+  EXPECT_EQ(without_pinky.knuckle_cameras[0], 0);
+  EXPECT_GT(without_pinky.knuckle_cameras[1], 0);
 }
 
 }  // namespace

@@ -8,8 +8,8 @@
 #include <cmath>
 
 #include "core/error.h"
-#include "silhouette/overlap.h"
 #include "tests/support/camera_ring.h"
+#include "tests/support/template_masks.h"
 #include "tracking/landmark_limbs.h"
 #include "tracking/tracker.h"
 
@@ -30,32 +30,6 @@ TemplatePose ForearmFolded(const BodyTemplate& body, bool inwards) {
   pose.dofs[kJointLeftShoulder] = {r.x(), r.y(), r.z()};
   pose.dofs[kJointLeftElbow] = {1.4, 0, 0};
   return pose;
-}
-
-// Joints the landmarks would give: the template's own, for the 14 limb joints.
-LandmarkJoints LandmarksOf(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose) {
-  LandmarkJoints landmarks;
-  landmarks.position = body.JointPositions(shape, pose);
-  landmarks.cameras.assign(kNumTemplateJoints, 0);
-  landmarks.rms_px.assign(kNumTemplateJoints, 1.0);
-  for (int j : {kJointLeftShoulder, kJointLeftElbow, kJointLeftWrist, kJointRightShoulder, kJointRightElbow,
-                kJointRightWrist, kJointLeftHip, kJointLeftKnee, kJointLeftAnkle, kJointLeftToe, kJointRightHip,
-                kJointRightKnee, kJointRightAnkle, kJointRightToe})
-    landmarks.cameras[j] = 8;
-  return landmarks;
-}
-
-std::vector<Image> UnionMasks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& a,
-                              const TemplatePose& b, const Rig& rig) {
-  const Mesh mesh_a = body.PosedMesh(shape, a), mesh_b = body.PosedMesh(shape, b);
-  std::vector<Image> masks;
-  for (const Camera& camera : rig.cameras) {
-    Image mask = RasterizeClosedMesh(mesh_a, camera);
-    const Image other = RasterizeClosedMesh(mesh_b, camera);
-    for (std::size_t i = 0; i < mask.data.size(); ++i) mask.data[i] = std::max(mask.data[i], other.data[i]);
-    masks.push_back(mask);
-  }
-  return masks;
 }
 
 // A skirt to the ankles hides the legs from the landmarks (the real Tsinghua frame's fitted skirt
@@ -87,7 +61,7 @@ TEST(LandmarkLimbs, TheLowerBoneTurnsOntoTheLandmarksWristTheRestStays) {
   EXPECT_LT((target[kJointLeftElbow] - start[kJointLeftElbow]).norm(), 0.01);
   EXPECT_GT((target[kJointLeftWrist] - start[kJointLeftWrist]).norm(), 0.2);
   const std::vector<TemplatePose> hypotheses =
-      LimbsFromLandmarks(body, shape, from, Limb::kLeftArm, LandmarksOf(body, shape, to));
+      LimbsFromLandmarks(body, shape, from, Limb::kLeftArm, testing::TemplateLandmarks(body, shape, to));
   ASSERT_EQ(hypotheses.size(), 2u);  // the forearm alone, both bones
   for (const TemplatePose& hypothesis : hypotheses) {
     const std::vector<Eigen::Vector3d> joints = body.JointPositions(shape, hypothesis);
@@ -95,9 +69,10 @@ TEST(LandmarkLimbs, TheLowerBoneTurnsOntoTheLandmarksWristTheRestStays) {
     for (int j : {kJointRightWrist, kJointLeftAnkle, kJointRightAnkle, kJointHead})
       EXPECT_LT((joints[j] - start[j]).norm(), 0.01) << BodyJointNames()[j];
   }
-  EXPECT_LT(LimbDisagreement(body.JointPositions(shape, hypotheses[0]), LandmarksOf(body, shape, to), Limb::kLeftArm),
+  EXPECT_LT(LimbDisagreement(body.JointPositions(shape, hypotheses[0]), testing::TemplateLandmarks(body, shape, to),
+                             Limb::kLeftArm),
             0.03);
-  LandmarkJoints unknown = LandmarksOf(body, shape, to);
+  LandmarkJoints unknown = testing::TemplateLandmarks(body, shape, to);
   unknown.cameras[kJointLeftWrist] = 0;
   EXPECT_TRUE(LimbsFromLandmarks(body, shape, from, Limb::kLeftArm, unknown).empty());
   EXPECT_LT(LimbDisagreement(start, unknown, Limb::kLeftArm), 0.0);
@@ -125,7 +100,7 @@ struct FoldScene {
   BodyShape shape = BodyShape::Uniform(1.75);
   Rig rig = testing::CameraRing(8, 200, 150);
   TemplatePose inwards = ForearmFolded(body, true), up = ForearmFolded(body, false);
-  std::vector<Image> masks = UnionMasks(body, shape, inwards, up, rig);
+  std::vector<Image> masks = testing::UnionTemplateMasks(body, shape, inwards, up, rig);
 };
 
 // The tracker holds the forearm one way when a frame's overlap drops (the masks hold both
@@ -140,7 +115,7 @@ TEST(LandmarkLimbs, TheTrackerFollowsTheLandmarksWhereTheSilhouettesHoldBothFold
   auto left_wrist_error = [&](const TemplatePose& held, const TemplatePose& said, std::string* flags) {
     TrackerOptions options;
     Tracker tracker(rig, {}, options);
-    const LandmarkJoints landmarks = LandmarksOf(body, shape, said);
+    const LandmarkJoints landmarks = testing::TemplateLandmarks(body, shape, said);
     tracker.UseLandmarks([&](int) { return std::make_shared<const LandmarkJoints>(landmarks); });
     tracker.Resume(shape, {held, held}, std::vector<double>(10, 0.99), {});  // the frames before were explained
     const TrackedFrame result = tracker.Track(10, masks);
@@ -164,7 +139,7 @@ TEST(LandmarkLimbs, TheTrackerFollowsTheLandmarksWhereTheSilhouettesHoldBothFold
 // frames only.
 TEST(LandmarkLimbs, TheTrackerAsksTheLandmarksEveryFewFramesWithoutAnOverlapDrop) {
   const FoldScene scene;
-  const LandmarkJoints landmarks = LandmarksOf(scene.body, scene.shape, scene.up);
+  const LandmarkJoints landmarks = testing::TemplateLandmarks(scene.body, scene.shape, scene.up);
   auto left_wrist_error = [&](int every, int frame, int* asked) {
     TrackerOptions options;
     options.landmark_check_every = every;

@@ -42,6 +42,15 @@ TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
   tracker = TrackerOptions();
   tracker.limb_search_repeat_drop = -0.1;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.limb_search_repeat_drop = -0.1: must be in [0, 1)");
+  tracker = TrackerOptions();
+  tracker.landmark_hand_disagreement_rad = 0;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.landmark_hand_disagreement_rad = 0: must be > 0");
+  tracker = TrackerOptions();
+  tracker.landmark_hand_iou_tolerance = 1;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.landmark_hand_iou_tolerance = 1: must be in [0, 1)");
+  tracker = TrackerOptions();
+  tracker.landmark_hand_max_wrist_gap_m = -0.01;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.landmark_hand_max_wrist_gap_m = -0.01: must be > 0");
   ScanRegistrationOptions registration;
   registration.min_pair_distance_m = 0.2;
   registration.max_pair_distance_m = 0.1;
