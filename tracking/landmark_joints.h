@@ -49,11 +49,11 @@ struct LandmarkJoints {
 };
 
 // Triangulates the limb joints (shoulders, elbows, wrists, hips, knees, ankles, toes) and the
-// hands' knuckles from
-// `views[c]` (one per rig camera; null where a camera has none; world z up). Each camera's left
-// and right are settled on the shoulders and hips (a camera may swap them); which side is the
-// person's left follows from where the nose and the toes point (what most cameras say when
-// neither is placed). A joint is placed where at least `min_cameras` cameras agree.
+// hands' knuckles from `views[c]` (one per rig camera; null where a camera has none; world z up).
+// Each camera's left and right are settled on the shoulders and hips (a camera may swap them);
+// which side is the person's left follows from where the nose and the toes point (what most
+// cameras say when neither is placed). A joint is placed where at least `min_cameras` cameras
+// agree.
 LandmarkJoints TriangulateLandmarkJoints(const Rig& rig, const std::vector<const BodyLandmarks*>& views,
                                          const LandmarkJointsOptions& options = {});
 

@@ -77,15 +77,16 @@ double HandDisagreementRad(const std::vector<Vector3d>& joints, const LandmarkJo
   return std::acos(std::clamp(hand.dot(seen), -1.0, 1.0));
 }
 
-std::vector<TemplatePose> HandsFromLandmarks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose,
-                                             Limb arm, const LandmarkJoints& landmarks, double max_wrist_gap_m) {
+std::optional<TemplatePose> HandFromLandmarks(const BodyTemplate& body, const BodyShape& shape,
+                                              const TemplatePose& pose, Limb arm, const LandmarkJoints& landmarks,
+                                              double max_wrist_gap_m) {
   const std::vector<Vector3d> joints = body.JointPositions(shape, pose);
   const Vector3d seen = LandmarkHandDirection(joints, landmarks, arm, max_wrist_gap_m);
-  if (seen.isZero()) return {};
+  if (seen.isZero()) return std::nullopt;
   const int wrist = LimbJoints(arm).end;
   std::vector<Vector3d> targets = joints;
   targets[wrist + 1] = joints[wrist] + (joints[wrist + 1] - joints[wrist]).norm() * seen;
-  return {FitPoseToJoints(body, shape, targets, nullptr, pose)};
+  return FitPoseToJoints(body, shape, targets, nullptr, pose);
 }
 
 }  // namespace confluent

@@ -2,6 +2,7 @@
 // Limbs placed where triangulated landmarks say they are (tracking/landmark_joints.h): how far a
 // pose's limb lies from them, and the pose with that limb turned onto them.
 
+#include <optional>
 #include <vector>
 
 #include "tracking/body_template.h"
@@ -38,7 +39,8 @@ double HandDisagreementRad(const std::vector<Eigen::Vector3d>& joints, const Lan
 
 // `pose` with the hand of `arm` turned at the wrist to point as the landmarks' hand does (see
 // HandDisagreementRad), the rest of the body held; none when they do not place it.
-std::vector<TemplatePose> HandsFromLandmarks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose,
-                                             Limb arm, const LandmarkJoints& landmarks, double max_wrist_gap_m);
+std::optional<TemplatePose> HandFromLandmarks(const BodyTemplate& body, const BodyShape& shape,
+                                              const TemplatePose& pose, Limb arm, const LandmarkJoints& landmarks,
+                                              double max_wrist_gap_m);
 
 }  // namespace confluent

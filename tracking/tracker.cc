@@ -1,6 +1,7 @@
 #include "tracking/tracker.h"
 
 #include <algorithm>
+#include <optional>
 #include <stdexcept>
 #include <chrono>
 #include <ctime>
@@ -230,16 +231,16 @@ void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std:
   for (Limb arm : {Limb::kLeftArm, Limb::kRightArm}) {
     const double before = HandDisagreementRad(result->joints, landmarks, arm, gap);
     if (before < options_.landmark_hand_disagreement_rad) continue;  // agrees, or unknown
-    for (const TemplatePose& hypothesis : HandsFromLandmarks(body_, shape_, result->pose, arm, landmarks, gap)) {
-      TrackedFrame candidate = FitLimbHypothesis(hypothesis, result->frame, masks, use, observations);
-      const double after = HandDisagreementRad(candidate.joints, landmarks, arm, gap);
-      if (after > before - options_.landmark_hand_min_approach_rad ||
-          candidate.mean_iou < result->mean_iou - options_.landmark_hand_iou_tolerance)
-        continue;
-      candidate.flags = result->flags;
-      candidate.flags.push_back(kLandmarksFlag + std::string(arm == Limb::kLeftArm ? "left_hand" : "right_hand"));
-      *result = std::move(candidate);
-    }
+    const std::optional<TemplatePose> hypothesis = HandFromLandmarks(body_, shape_, result->pose, arm, landmarks, gap);
+    if (!hypothesis) continue;
+    TrackedFrame candidate = FitLimbHypothesis(*hypothesis, result->frame, masks, use, observations);
+    const double after = HandDisagreementRad(candidate.joints, landmarks, arm, gap);
+    if (after > before - options_.landmark_hand_min_approach_rad ||
+        candidate.mean_iou < result->mean_iou - options_.landmark_hand_iou_tolerance)
+      continue;
+    candidate.flags = result->flags;
+    candidate.flags.push_back(kLandmarksFlag + std::string(arm == Limb::kLeftArm ? "left_hand" : "right_hand"));
+    *result = std::move(candidate);
   }
 }
 

@@ -35,8 +35,14 @@ inline std::vector<Image> UnionTemplateMasks(const BodyTemplate& body, const Bod
   return masks;
 }
 
+// Where a perfect detector puts the knuckles' midpoint on the hand of `wrist` (template order,
+// `joints` in the same order): 60% of the way to the hand's end.
+inline Eigen::Vector3d KnucklesOf(const std::vector<Eigen::Vector3d>& joints, int wrist) {
+  return joints[wrist] + 0.6 * (joints[wrist + 1] - joints[wrist]);
+}
+
 // The landmark joints a perfect detector gives for the template in `pose`: its 14 limb joints,
-// and the knuckles 60% of the way along each hand.
+// and the knuckles (KnucklesOf).
 inline LandmarkJoints TemplateLandmarks(const BodyTemplate& body, const BodyShape& shape, const TemplatePose& pose) {
   LandmarkJoints landmarks;
   landmarks.position = body.JointPositions(shape, pose);
@@ -48,8 +54,7 @@ inline LandmarkJoints TemplateLandmarks(const BodyTemplate& body, const BodyShap
     landmarks.cameras[j] = 8;
   for (int side = 0; side < 2; ++side) {
     const int wrist = side ? kJointRightWrist : kJointLeftWrist;
-    landmarks.knuckles[side] =
-        landmarks.position[wrist] + 0.6 * (landmarks.position[wrist + 1] - landmarks.position[wrist]);
+    landmarks.knuckles[side] = KnucklesOf(landmarks.position, wrist);
     landmarks.knuckle_cameras[side] = 8;
   }
   return landmarks;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -57,7 +58,7 @@ TEST(LandmarkHands, TheDisagreementIsTheAngleBetweenTheHandsWhereTheWristsAgree)
   LandmarkJoints on_wrist = straight;
   on_wrist.knuckles[0] = on_wrist.position[kJointLeftWrist] + Eigen::Vector3d(0, 0, -0.02);
   EXPECT_LT(HandDisagreementRad(bent, on_wrist, Limb::kLeftArm, kMaxWristGapM), 0.0);
-  EXPECT_TRUE(HandsFromLandmarks(body, shape, LeftHandBent(0.7), Limb::kLeftArm, unknown, kMaxWristGapM).empty());
+  EXPECT_FALSE(HandFromLandmarks(body, shape, LeftHandBent(0.7), Limb::kLeftArm, unknown, kMaxWristGapM).has_value());
 }
 
 TEST(LandmarkHands, TheHandTurnsAtTheWristOntoTheLandmarksTheRestStays) {
@@ -67,10 +68,10 @@ TEST(LandmarkHands, TheHandTurnsAtTheWristOntoTheLandmarksTheRestStays) {
   const std::vector<Eigen::Vector3d> start = body.JointPositions(shape, from);
   const std::vector<Eigen::Vector3d> truth = body.JointPositions(shape, LeftHandBent(0.0));
   const LandmarkJoints landmarks = testing::TemplateLandmarks(body, shape, LeftHandBent(0.0));
-  const std::vector<TemplatePose> hypotheses =
-      HandsFromLandmarks(body, shape, from, Limb::kLeftArm, landmarks, kMaxWristGapM);
-  ASSERT_EQ(hypotheses.size(), 1u);
-  const std::vector<Eigen::Vector3d> joints = body.JointPositions(shape, hypotheses[0]);
+  const std::optional<TemplatePose> hypothesis =
+      HandFromLandmarks(body, shape, from, Limb::kLeftArm, landmarks, kMaxWristGapM);
+  ASSERT_TRUE(hypothesis.has_value());
+  const std::vector<Eigen::Vector3d> joints = body.JointPositions(shape, *hypothesis);
   EXPECT_LT(LeftHandAngle(joints, truth), 0.05);
   EXPECT_LT((joints[kJointLeftHandEnd] - truth[kJointLeftHandEnd]).norm(), 0.01);
   for (int j = 0; j < kNumTemplateJoints; ++j) {

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "tests/support/camera_ring.h"
+#include "tests/support/template_masks.h"
 #include "tracking/body_template.h"
 #include "tracking/landmark_joints.h"
 
@@ -35,11 +36,6 @@ TemplatePose Reaching() {
 // The direction the body of Reaching() faces (the template faces +y at rest).
 Eigen::Vector3d Forward() { return Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()) * Eigen::Vector3d::UnitY(); }
 
-// Where the knuckles' midpoint lies on the hand of `wrist`: 60% of the way to the hand's end.
-Eigen::Vector3d Knuckles(const std::vector<Eigen::Vector3d>& joints, int wrist) {
-  return joints[wrist] + 0.6 * (joints[wrist + 1] - joints[wrist]);
-}
-
 // Each camera's landmarks of `joints` (and the hands' knuckles, a nose ahead of the head, heels
 // behind the ankles), with `noise_px` of Gaussian noise, all visible.
 std::vector<BodyLandmarks> Project(const Rig& rig, const std::vector<Eigen::Vector3d>& joints, double noise_px) {
@@ -56,8 +52,8 @@ std::vector<BodyLandmarks> Project(const Rig& rig, const std::vector<Eigen::Vect
     for (int side = 0; side < 2; ++side) {  // the index and pinky knuckles, 2 cm either side of the hand's axis
       const int wrist = side ? kJointRightWrist : kJointLeftWrist;
       const Eigen::Vector3d across = (joints[wrist + 1] - joints[wrist]).cross(Eigen::Vector3d::UnitZ()).normalized();
-      add(19 + side, Knuckles(joints, wrist) + 0.02 * across);
-      add(17 + side, Knuckles(joints, wrist) - 0.02 * across);
+      add(19 + side, testing::KnucklesOf(joints, wrist) + 0.02 * across);
+      add(17 + side, testing::KnucklesOf(joints, wrist) - 0.02 * across);
     }
     add(0, joints[kJointHead] + 0.1 * Forward());
     add(29, joints[kJointLeftAnkle] - 0.06 * Forward() - Eigen::Vector3d(0, 0, 0.05));
@@ -107,7 +103,7 @@ TEST_F(Triangulation, EveryLimbJointIsPlacedFromNoisyLandmarks) {
   for (int side = 0; side < 2; ++side) {
     const int wrist = side ? kJointRightWrist : kJointLeftWrist;
     EXPECT_EQ(found.knuckle_cameras[side], 8);
-    EXPECT_LT((found.knuckles[side] - Knuckles(truth, wrist)).norm(), 0.02) << side;
+    EXPECT_LT((found.knuckles[side] - testing::KnucklesOf(truth, wrist)).norm(), 0.02) << side;
   }
 }
 
@@ -121,8 +117,9 @@ TEST_F(Triangulation, CamerasThatSwapLeftAndRightOrMisplaceAWristAreOutvoted) {
   EXPECT_EQ(found.cameras[kJointLeftWrist], 7);  // camera 0 disagrees
   EXPECT_EQ(found.cameras[kJointRightElbow], 8);  // the swapped cameras agree once swapped back
   EXPECT_EQ(found.cameras[kJointLeftShoulder], 8);
-  EXPECT_LT((found.knuckles[0] - Knuckles(truth, kJointLeftWrist)).norm(), 0.02);  // the sides settled as the joints'
-  EXPECT_LT((found.knuckles[1] - Knuckles(truth, kJointRightWrist)).norm(), 0.02);
+  // The sides settled as the joints':
+  EXPECT_LT((found.knuckles[0] - testing::KnucklesOf(truth, kJointLeftWrist)).norm(), 0.02);
+  EXPECT_LT((found.knuckles[1] - testing::KnucklesOf(truth, kJointRightWrist)).norm(), 0.02);
 }
 
 // A detector that sees the back takes it for the front: five cameras of eight swap the sides.
