@@ -85,6 +85,7 @@ void TrackerOptions::Check() const {
                 owner + "init_rest_pull_min_iou_gain", init_rest_pull_min_iou_gain, "in [0, 1)");
   RequireOption(skirt_try_below_iou >= 0 && skirt_try_below_iou <= 1, owner + "skirt_try_below_iou",
                 skirt_try_below_iou, "in [0, 1]");
+  skirt_search.Check(owner + "skirt_search.");
   RequireOption(girth_inflation_max >= 0 && girth_inflation_max <= 0.5, owner + "girth_inflation_max",
                 girth_inflation_max, "in [0, 0.5]");
   RequireOption(girth_inflation_below_iou >= 0 && girth_inflation_below_iou <= 1, owner + "girth_inflation_below_iou",
@@ -268,6 +269,26 @@ void Tracker::Evaluate(const BodyShape& shape, const std::vector<Image>& masks, 
   result->joints = body_.JointPositions(shape, result->pose);
 }
 
+void Tracker::SearchSkirtShape(const std::vector<Image>& masks, const std::vector<bool>& use,
+                               const SilhouetteObservations& observations, TrackedFrame* result) {
+  if (!options_.skirt_search.enabled || shape_.skirt_length_m <= 0.0) return;
+  const SkirtSearchResult found = SearchSkirt(shape_, options_.skirt_search, [&](const BodyShape& shape) {
+    TrackedFrame candidate = *result;
+    Evaluate(shape, masks, use, &candidate);
+    return candidate.mean_iou;
+  });
+  if (!found.changed) return;
+  shape_ = found.shape;
+  Evaluate(shape_, masks, use, result);
+  // The pose was fitted inside the other skirt: fitted again inside this one, kept when better.
+  TrackedFrame refit = *result;
+  refit.fit = FitTemplateToSilhouettes(body_, observations, options_.fit, &shape_, &refit.pose);
+  Evaluate(shape_, masks, use, &refit);
+  if (refit.mean_iou > result->mean_iou) *result = std::move(refit);
+  const auto cm = [](double m) { return std::to_string(static_cast<int>(std::lround(100 * m))); };
+  result->flags.push_back("skirt:" + cm(shape_.skirt_length_m) + "cm+" + cm(shape_.skirt_flare_m) + "cm");
+}
+
 void Tracker::InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result) {
   if (options_.girth_inflation_max <= 0.0 || result->mean_iou >= options_.girth_inflation_below_iou) return;
   TrackedFrame best = *result;
@@ -403,6 +424,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   fitted.flags.insert(fitted.flags.begin(), result.flags.begin(), result.flags.end());
   result = std::move(fitted);
   shape_ = fitted_shape;  // FitFirstFrame evaluated `result` with it
+  SearchSkirtShape(masks, use, observations, &result);
   if (options_.limb_search) SearchLimbs(masks, use, observations, options_.limb_fits_init, &result);
   SettleLimbsByLandmarks(masks, use, observations, &result);
   InflateGirths(masks, use, &result);

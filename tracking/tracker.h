@@ -15,6 +15,7 @@
 #include "tracking/hull_placement.h"
 #include "tracking/landmark_joints.h"
 #include "tracking/silhouette_fit.h"
+#include "tracking/skirt_search.h"
 
 namespace confluent {
 
@@ -34,6 +35,9 @@ struct TrackerOptions {
   bool try_skirt = true;           // initial shape fit also from a long skirt (BodyShape::skirt_*) ...
   double skirt_try_below_iou = 0.92; // ... when the fit without one has a mean IoU below this (1: always) ...
   double skirt_min_iou_gain = 0.01; // ... kept when its mean IoU beats the fit without by this much
+  // A fitted skirt's length and flare are then searched for the best overlap of the tracking
+  // cameras (the fit makes a dress that flares on some sides a long straight tube).
+  SkirtSearchOptions skirt_search;
   // The first frame is fitted without and with the pulls towards rest angles (fit.rest_prior_scale);
   // the pulled fit is kept when its mean IoU beats the other by this much.
   double init_rest_pull_min_iou_gain = 0.002;
@@ -201,6 +205,10 @@ class Tracker {
   // each hand (see TrackerOptions); nothing without a landmark source.
   void SettleLimbsByLandmarks(const std::vector<Image>& masks, const std::vector<bool>& use,
                               const SilhouetteObservations& observations, TrackedFrame* result);
+  // Changes a fitted skirt's length and flare where that overlaps the masks better (skirt_search).
+  // The pose is then fitted again, kept when it overlaps better.
+  void SearchSkirtShape(const std::vector<Image>& masks, const std::vector<bool>& use,
+                        const SilhouetteObservations& observations, TrackedFrame* result);
   // Grows every girth of the shape where that overlaps the masks better (TrackerOptions::girth_inflation_max).
   void InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result);
   // Initialize's fit of the first frame from `start_shape`, with the pulls towards rest angles

@@ -28,6 +28,15 @@ TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
   tracker.girth_inflation_below_iou = 1.5;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.girth_inflation_below_iou = 1.5: must be in [0, 1]");
   tracker = TrackerOptions();
+  tracker.skirt_search.length_step_m = 0.0;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.skirt_search.length_step_m = 0: must be > 0");
+  tracker = TrackerOptions();
+  tracker.skirt_search.refinements = -1;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.skirt_search.refinements = -1: must be in [0, 8]");
+  tracker = TrackerOptions();
+  tracker.skirt_search.min_gain = 1.0;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.skirt_search.min_gain = 1: must be in [0, 1)");
+  tracker = TrackerOptions();
   tracker.fit.downscale = 17;
   testing::ExpectCheckRefuses(tracker, "SilhouetteFitOptions.downscale = 17: must be in [0, 16]");
   tracker = TrackerOptions();
