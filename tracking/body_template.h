@@ -81,6 +81,13 @@ struct BodyShape {
   static BodyShape Uniform(double height_m);
 };
 
+// The largest skirt (BodyShape::skirt_length_m, skirt_flare_m) for a body whose lengths and girths
+// are scaled by about these factors: down to about the ground, flared like a wide dress. The
+// silhouette fit's bounds and the skirt search's grid (tracking/skirt_search.h).
+inline std::array<double, 2> MaxSkirt(double length_scale, double girth_scale) {
+  return {0.9 * length_scale, 0.3 * girth_scale};
+}
+
 // A pose of the template: root translation and rotation plus all joint DOFs.
 struct TemplatePose {
   Eigen::Vector3d root_translation = Eigen::Vector3d::Zero();  // added to the rest pelvis position, m

@@ -308,8 +308,7 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
   if (problem.HasParameterBlock(fp->skirt)) {
     // A weak pull towards no skirt; the skirt reaches at most to the ground and flares at most
     // to a wide dress (both follow the body's scale).
-    const double length_scale = shape_prior[0], girth_scale = shape_prior[ti::kNumShapeGroups];
-    const double max_skirt[2] = {0.9 * length_scale, 0.3 * girth_scale};
+    const std::array<double, 2> max_skirt = MaxSkirt(shape_prior[0], shape_prior[ti::kNumShapeGroups]);
     problem.AddResidualBlock(new ceres::NormalPrior(Eigen::Matrix2d::Identity() * options.skirt_prior_weight,
                                                     Eigen::Vector2d::Zero()),
                              nullptr, fp->skirt);

@@ -20,8 +20,9 @@ SkirtSearchResult SearchSkirt(const BodyShape& shape, const SkirtSearchOptions& 
                               const std::function<double(const BodyShape&)>& overlap) {
   options.Check("SkirtSearchOptions.");
   if (!(shape.skirt_length_m > 0.0)) throw std::invalid_argument("SearchSkirt: the shape has no skirt");
-  const int torso = static_cast<int>(BodySegment::kLowerTorso);
-  const double max_length = 0.9 * shape.length_scale[torso], max_flare = 0.3 * shape.girth_scale[torso];
+  // The fit's bounds, from the scales of the shape group it takes them from (the head's alone).
+  const int head = static_cast<int>(BodySegment::kHead);
+  const auto [max_length, max_flare] = MaxSkirt(shape.length_scale[head], shape.girth_scale[head]);
 
   SkirtSearchResult result;
   result.shape = shape;
@@ -34,8 +35,8 @@ SkirtSearchResult SearchSkirt(const BodyShape& shape, const SkirtSearchOptions& 
     if (length < options.min_length_m - 1e-9 || length > max_length + 1e-9 || flare < -1e-9 || flare > max_flare + 1e-9)
       return;
     BodyShape candidate = shape;
-    candidate.skirt_length_m = std::clamp(length, options.min_length_m, max_length);
-    candidate.skirt_flare_m = std::clamp(flare, 0.0, max_flare);
+    candidate.skirt_length_m = length;
+    candidate.skirt_flare_m = std::max(flare, 0.0);
     const double value = overlap(candidate);
     ++result.evaluations;
     if (value > best_overlap) {

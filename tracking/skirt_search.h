@@ -12,9 +12,8 @@ namespace confluent {
 
 struct SkirtSearchOptions {
   bool enabled = true;
-  // The coarse grid: lengths from min_length_m to the fit's bound (0.9 times the lower torso's
-  // length scale, m), flares from 0 to its bound (0.3 times its girth scale), in these steps;
-  // then `refinements` grids of half the last steps around the best so far.
+  // The coarse grid: lengths from min_length_m and flares from 0 to the fit's bounds (MaxSkirt),
+  // in these steps; then `refinements` grids of half the last steps around the best so far.
   double length_step_m = 0.1;
   double flare_step_m = 0.04;
   double min_length_m = 0.2;
