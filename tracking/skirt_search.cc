@@ -1,6 +1,7 @@
 #include "tracking/skirt_search.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -22,7 +23,9 @@ SkirtSearchResult SearchSkirt(const BodyShape& shape, const SkirtSearchOptions& 
   if (!(shape.skirt_length_m > 0.0)) throw std::invalid_argument("SearchSkirt: the shape has no skirt");
   // The fit's bounds, from the scales of the shape group it takes them from (the head's alone).
   const int head = static_cast<int>(BodySegment::kHead);
-  const auto [max_length, max_flare] = MaxSkirt(shape.length_scale[head], shape.girth_scale[head]);
+  // Plain variables, not a structured binding: C++17 lambdas cannot capture those (clang refuses).
+  const std::array<double, 2> max_skirt = MaxSkirt(shape.length_scale[head], shape.girth_scale[head]);
+  const double max_length = max_skirt[0], max_flare = max_skirt[1];
 
   SkirtSearchResult result;
   result.shape = shape;
