@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "calib/rig_check.h"
 #include "silhouette/overlap.h"
 #include "tracking/limb_hypotheses.h"
 #include "tracking/tracker.h"

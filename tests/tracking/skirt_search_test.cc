@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "calib/rig_check.h"
 #include "core/error.h"
 #include "silhouette/overlap.h"
 #include "tests/support/camera_ring.h"
