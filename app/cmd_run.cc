@@ -35,6 +35,11 @@ int RunRun(const ParsedArgs& args, const Context& context) {
   if (options.refine_keyframes < 1 || options.refine_keyframes > 1000)
     throw UsageError("--refine-keyframes: must be within [1, 1000]");
   options.refine_photo = !args.has("no-photo-refine");
+  options.photo_rounds = args.get_int("photo-rounds", options.photo_rounds);
+  if (options.photo_rounds < 1 || options.photo_rounds > 20) throw UsageError("--photo-rounds: must be within [1, 20]");
+  options.photo_full_resolution_rounds = args.get_int("photo-full-res-rounds", options.photo_full_resolution_rounds);
+  if (options.photo_full_resolution_rounds < 0 || options.photo_full_resolution_rounds > options.photo_rounds)
+    throw UsageError("--photo-full-res-rounds: must be within [0, --photo-rounds = " + std::to_string(options.photo_rounds) + "]");
   options.landmarks = !args.has("no-landmarks");
   options.girth_inflation = GirthInflationFromArgs(args);
   options.threads = args.get_int("threads", options.threads);
@@ -87,6 +92,8 @@ CommandSpec MakeRunCommand() {
       {"refine-iterations", "N", "rounds of silhouette refinement per frame (default 18)"},
       {"refine-keyframes", "N", "refine only every N-th frame from its deformation, the others from the previous frame's correction in fewer rounds (default 1)"},
       {"no-photo-refine", "", "skip the photo-consistency refinement that follows the silhouette refinement"},
+      {"photo-rounds", "N", "rounds of the photo-consistency refinement per frame (default 5)"},
+      {"photo-full-res-rounds", "N", "of those, the last N measure the flow between cameras at full resolution instead of half: slower, sharper texture (default 0; e.g. 8 and 3)"},
       GirthInflationOptionSpec(),
       {"no-landmarks", "", "track from the silhouettes alone, without BlazePose's body landmarks (first frame, lost limbs, every 5th frame)"},
       {"no-render", "", "skip the 3D-video render stage"},

@@ -71,6 +71,8 @@ void BM_PhotoRefineFrame(benchmark::State& state) {
   const Scene& scene = GetScene();
   PhotoRefinementOptions options;
   options.flow_finest_scale = static_cast<int>(state.range(0));
+  options.rounds = static_cast<int>(state.range(1));
+  options.full_resolution_rounds = static_cast<int>(state.range(2));
   const PhotoRefiner refiner(scene.truth, options);
   PhotoRefinementSummary summary;
   for (auto _ : state) benchmark::DoNotOptimize(refiner.Refine(scene.start, scene.cameras, scene.images, &summary));
@@ -94,8 +96,16 @@ void BM_ScanSilhouetteOneCamera(benchmark::State& state) {
 
 BENCHMARK(BM_ScanSilhouetteOneCamera)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SilhouetteRefineFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
-// Argument: the flow's finest pyramid level (1, the default: half resolution; 0: full).
-BENCHMARK(BM_PhotoRefineFrame)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
+// Arguments: the flow's finest pyramid level (1, the default: half resolution; 0: full), the
+// rounds (default 5) and how many of the last ones measure at full resolution (default 0;
+// `run --photo-rounds 8 --photo-full-res-rounds 3`).
+BENCHMARK(BM_PhotoRefineFrame)
+    ->Args({1, 5, 0})
+    ->Args({0, 5, 0})
+    ->Args({1, 8, 3})
+    ->Args({0, 8, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace confluent

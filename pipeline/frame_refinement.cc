@@ -13,6 +13,8 @@ void FrameRefinementOptions::Check() const {
   const std::string owner = "FrameRefinementOptions.";
   RequireOption(silhouette_rounds >= 0, owner + "silhouette_rounds", silhouette_rounds, ">= 0");
   RequireOption(photo_rounds >= 0, owner + "photo_rounds", photo_rounds, ">= 0");
+  RequireOption(photo_full_resolution_rounds >= 0, owner + "photo_full_resolution_rounds", photo_full_resolution_rounds,
+                ">= 0");
   RequireOption(outline_rounds >= 0, owner + "outline_rounds", outline_rounds, ">= 0");
   RequireOption(keyframe_interval >= 1, owner + "keyframe_interval", keyframe_interval, ">= 1");
   RequireOption(carried_silhouette_rounds >= 0, owner + "carried_silhouette_rounds", carried_silhouette_rounds, ">= 0");
@@ -34,6 +36,7 @@ PhotoRefinementOptions PhotoOptions(const FrameRefinementOptions& options) {
   PhotoRefinementOptions photo;
   photo.threads = options.threads;
   photo.rounds = options.photo_rounds;
+  photo.full_resolution_rounds = options.photo_full_resolution_rounds;
   return photo;
 }
 

@@ -15,6 +15,10 @@ void RunOptions::Check() const {
                 "within [1, 50]");
   RequireOption(refine_keyframes >= 1 && refine_keyframes <= 1000, "RunOptions.refine_keyframes", refine_keyframes,
                 "within [1, 1000]");
+  RequireOption(photo_rounds >= 1 && photo_rounds <= 20, "RunOptions.photo_rounds", photo_rounds, "within [1, 20]");
+  RequireOption(photo_full_resolution_rounds >= 0 && photo_full_resolution_rounds <= photo_rounds,
+                "RunOptions.photo_full_resolution_rounds", photo_full_resolution_rounds,
+                "within [0, photo_rounds = " + std::to_string(photo_rounds) + "]");
   RequireOption(threads >= 1 && threads <= 64, "RunOptions.threads", threads, "within [1, 64]");
   RequireOption(fps >= 0.0 && fps <= 1000.0, "RunOptions.fps", fps, "within [0, 1000] (0: automatic)");
   RequireOption(render_options.width >= 16 && render_options.width <= 8192, "RunOptions.render_options.width",
@@ -62,6 +66,8 @@ std::string RunCapture(const RunOptions& options, const std::function<ProgressCa
   inputs.refine_iterations = options.refine_iterations;
   inputs.refine_keyframes = options.refine_keyframes;
   inputs.refine_photo = options.refine_silhouettes && options.refine_photo;
+  inputs.photo_rounds = options.photo_rounds;
+  inputs.photo_full_resolution_rounds = options.photo_full_resolution_rounds;
   inputs.threads = options.threads;
   inputs.landmarks = options.landmarks;
   if (options.girth_inflation) inputs.tracker.InflateGirthsAlways(*options.girth_inflation);

@@ -124,6 +124,8 @@ StageReport RunDeformStage(const RunInputs& inputs, const BodyTemplate& body, co
     options.carried_silhouette_rounds = std::min(options.carried_silhouette_rounds, inputs.refine_iterations);
     options.threads = inputs.threads;
     options.keyframe_interval = inputs.refine_keyframes;
+    options.photo_rounds = inputs.photo_rounds;
+    options.photo_full_resolution_rounds = inputs.photo_full_resolution_rounds;
     const int lanes = inputs.refine_keyframes == 1 && inputs.threads >= 2 && todo.size() >= 2 ? 2 : 1;
     refiners.resize(lanes);
     const std::vector<Camera> used_cameras = inputs.cameras.UsedCameras(inputs.capture->rig());

@@ -42,6 +42,9 @@ struct PhotoRefinementOptions {
   // resolution, cost 3.5x the time for +0.27 dB held-out PSNR on the studio default (DIS's
   // medium preset, used until 2026-11; now the fast one).
   int flow_finest_scale = 1;
+  // The last rounds measure the flow at full resolution instead (finest scale 0): the coarse
+  // rounds bring the surface near, the fine ones place it to a fraction of a full-size pixel.
+  int full_resolution_rounds = 0;
   // Iterations of DIS's variational refinement of the flow, in the last round only: the earlier
   // rounds' moves are measured again by the next round (the fast preset's 5 in every round: 27%
   // more photo-refinement time for +0.01 dB held-out PSNR on the studio default, 2026-11-26).

@@ -501,6 +501,23 @@ TEST_F(RunCommandTest, OutOfRangeRefineKeyframesIsAUsageError) {
   }
 }
 
+TEST_F(RunCommandTest, OutOfRangePhotoRoundsAreUsageErrors) {
+  testing::TempDir out;
+  const std::vector<std::vector<std::string>> bad = {{"--photo-rounds", "0"},
+                                                     {"--photo-rounds", "21"},
+                                                     {"--photo-full-res-rounds", "-1"},
+                                                     {"--photo-full-res-rounds", "6"},  // more than the 5 rounds
+                                                     {"--photo-rounds", "3", "--photo-full-res-rounds", "4"}};
+  for (const std::vector<std::string>& options : bad) {
+    std::vector<std::string> command = {"run", Capture(), "--out", out / "run"};
+    command.insert(command.end(), options.begin(), options.end());
+    const testing::CommandResult result = RunConfluent(command);
+    EXPECT_EQ(result.exit_code, 2) << options.back();
+    EXPECT_NE(result.stderr_text.find(options[options.size() - 2]), std::string::npos) << result.stderr_text;
+    EXPECT_FALSE(fs::exists(out / "run/masks")) << "no work before the options are checked";
+  }
+}
+
 TEST_F(RunCommandTest, CorruptImageMidwayStopsWithItsNameAndKeepsEarlierFrames) {
   testing::TempDir out;
   const std::string capture = out / "capture";

@@ -27,6 +27,9 @@ TEST(RefineOptions, CheckNamesTheFieldAndTheValue) {
   photo = PhotoRefinementOptions();
   photo.max_flow_px = -2.5;
   testing::ExpectCheckRefuses(photo, "PhotoRefinementOptions.max_flow_px = -2.5: must be > 0");
+  photo = PhotoRefinementOptions();
+  photo.full_resolution_rounds = -1;
+  testing::ExpectCheckRefuses(photo, "PhotoRefinementOptions.full_resolution_rounds = -1: must be >= 0");
   EXPECT_THROW(NormalisedDiffusion(MakeUvSphere(1.0, 6, 12), 0.0, "sphere"), UsageError);
 }
 
