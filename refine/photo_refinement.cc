@@ -93,7 +93,8 @@ struct PhotoRefiner::Impl {
   std::unique_ptr<CpuRasterizer> rasterizer;
 
   // Camera `a` against neighbour `b`: b's image reprojected into a through the surface, the flow
-  // from it to a's image (with this many variational refinement iterations), and per used pixel
+  // from it to a's image (down to pyramid level `finest_scale`, with this many variational
+  // refinement iterations), and per used pixel
   // the triangulated offset along the face normal.
   void MeasurePair(const View& a, const View& b, const RowMatrixX3d& face_normals, int finest_scale, int variational_iterations,
                    OffsetSums* sums) const {
