@@ -152,6 +152,14 @@ std::map<std::string, std::string> RunOutputs(const std::string& root) {
   return outputs;
 }
 
+// The rows of `stage` in the run's timings.csv: one per frame (or step) that the stage computed.
+int TimingRows(const std::string& run, const std::string& stage) {
+  std::ifstream in(run + "/timings.csv");
+  int rows = 0;
+  for (std::string line; std::getline(in, line);) rows += line.rfind(stage + ",", 0) == 0;
+  return rows;
+}
+
 // Every file under its final name in `root` reads back (PLY, PNG, JSON); temporaries are named
 // .tmp<pid>_<name> and are the only files allowed to be partial.
 void ExpectEveryFileParses(const std::string& root, const std::string& when) {
@@ -373,9 +381,14 @@ TEST_F(RunCommandTest, KilledInEveryStageResumesToTheUninterruptedOutputs) {
 // Without keyframes (the default) consecutive frames are refined two at a time, each by its own
 // refiner. Shards of odd length pair the frames differently from one run (frame 2 alone, then
 // 3 with 4 ...), so their scans match the uninterrupted run's only if a frame's refinement is
-// independent of the frame beside it.
+// independent of the frame beside it. Both runs start from the reference run's silhouettes,
+// tracking and correspondences (its scans and renders removed): only the deform stage runs.
 TEST_F(RunCommandTest, FramesRefinedSideBySideMatchShardsThatPairThemDifferently) {
   testing::TempDir out;
+  auto seed = [&](const std::string& run) {
+    fs::copy(ReferenceRun(), run, fs::copy_options::recursive);
+    for (const char* stage_output : {"scan", "renders", "timings.csv"}) fs::remove_all(fs::path(run) / stage_output);
+  };
   auto args = [&](const std::string& run, const std::string& frames) {
     std::vector<std::string> command = {"run", Capture(), "--out", run, "--exclude-camera", "holdout0",
                                         "--exclude-camera", "holdout1", "--no-render"};
@@ -383,6 +396,8 @@ TEST_F(RunCommandTest, FramesRefinedSideBySideMatchShardsThatPairThemDifferently
     return command;
   };
   const std::string whole = out / "whole", sharded = out / "sharded";
+  seed(whole);
+  seed(sharded);
   const testing::CommandResult one = RunConfluent(args(whole, ""));
   ASSERT_EQ(one.exit_code, 0) << one.stdout_text << one.stderr_text;
   for (const std::string frames : {"0:3", "3:10"}) {
@@ -391,6 +406,8 @@ TEST_F(RunCommandTest, FramesRefinedSideBySideMatchShardsThatPairThemDifferently
   }
   ASSERT_EQ(CountFiles(whole + "/scan", ".ply"), 10);
   ASSERT_EQ(CountFiles(sharded + "/scan", ".ply"), 10);
+  EXPECT_EQ(TimingRows(whole, "tracking"), 0) << "the tracking was the reference run's";
+  EXPECT_EQ(TimingRows(whole, "deform"), 10);
   const auto expected = RunOutputs(whole), actual = RunOutputs(sharded);
   for (const auto& [file, bytes] : expected)
     if (file.rfind("scan/", 0) == 0) {
@@ -403,14 +420,8 @@ TEST_F(RunCommandTest, FramesRefinedSideBySideMatchShardsThatPairThemDifferently
 // refinement; the render stage, drawing them from the scan files, draws the same pixels.
 TEST_F(RunCommandTest, VideoFramesDrawnWithTheScansEqualTheRenderStagesOwn) {
   const auto reference = RunOutputs(ReferenceRun());
-  auto timing_rows = [](const std::string& run, const std::string& stage) {
-    std::ifstream in(run + "/timings.csv");
-    int rows = 0;
-    for (std::string line; std::getline(in, line);) rows += line.rfind(stage + ",", 0) == 0;
-    return rows;
-  };
-  EXPECT_EQ(timing_rows(ReferenceRun(), "render"), 10);
-  EXPECT_EQ(timing_rows(ReferenceRun(), "render_read"), 0) << "the reference's frames were drawn by the render stage";
+  EXPECT_EQ(TimingRows(ReferenceRun(), "render"), 10);
+  EXPECT_EQ(TimingRows(ReferenceRun(), "render_read"), 0) << "the reference's frames were drawn by the render stage";
   testing::TempDir out;
   const std::string run = out / "run";
   fs::copy(ReferenceRun(), run, fs::copy_options::recursive);
@@ -418,7 +429,7 @@ TEST_F(RunCommandTest, VideoFramesDrawnWithTheScansEqualTheRenderStagesOwn) {
   fs::remove(run + "/timings.csv");
   const testing::CommandResult result = RunConfluent(RunArgs(run));
   ASSERT_EQ(result.exit_code, 0) << result.stdout_text << result.stderr_text;
-  EXPECT_EQ(timing_rows(run, "render_read"), 10);
+  EXPECT_EQ(TimingRows(run, "render_read"), 10);
   const auto redrawn = RunOutputs(run);
   ASSERT_EQ(CountFiles(run + "/renders/orbit", ".png"), 10);
   for (const auto& [file, bytes] : reference)
