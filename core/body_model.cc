@@ -23,6 +23,19 @@ const std::array<int, kNumBodyJoints>& BodyJointParents() {
   return parents;
 }
 
+bool JointJoinsSegments(int joint) {
+  switch (joint) {
+    case kJointPelvis:
+    case kJointChest:
+    case kJointHeadEnd:
+    case kJointLeftHandEnd:
+    case kJointRightHandEnd:
+    case kJointLeftToe:
+    case kJointRightToe: return false;
+    default: return joint >= 0 && joint < kNumBodyJoints;
+  }
+}
+
 std::array<Eigen::Vector3d, kNumBodyJoints> BodyRestPositions(double arm_angle_rad) {
   using Eigen::Vector3d;
   std::array<Vector3d, kNumBodyJoints> r;

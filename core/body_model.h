@@ -28,6 +28,12 @@ const std::vector<std::string>& BodyJointNames();
 // Each joint's parent (-1 for the pelvis, the root).
 const std::array<int, kNumBodyJoints>& BodyJointParents();
 
+// Whether two of the body's 16 surface segments meet at `joint` (the spine between the lower and
+// the upper torso, the neck, the head, the shoulders, elbows, wrists, hips, knees and ankles).
+// Not the pelvis, the root, inside the lower torso; not the chest, inside the upper torso; not the
+// ends of the head, hands and feet.
+bool JointJoinsSegments(int joint);
+
 // Rest joint positions of a 1.75 m adult, the upper arms `arm_angle_rad` from the vertical.
 std::array<Eigen::Vector3d, kNumBodyJoints> BodyRestPositions(double arm_angle_rad);
 

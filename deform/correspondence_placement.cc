@@ -2,10 +2,12 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <set>
 
+#include "core/body_model.h"
 #include "core/body_segments.h"
 #include "core/error.h"
 #include "core/mesh_ops.h"
@@ -24,7 +26,20 @@ void CorrespondencePlacementOptions::Check() const {
   RequireOption(max_normal_angle_deg > 0 && max_normal_angle_deg <= 180, owner + "max_normal_angle_deg",
                 max_normal_angle_deg, "in (0, 180]");
   RequireOption(side_margin_m >= 0, owner + "side_margin_m", side_margin_m, ">= 0");
+  for (double scale : joint_clearance_scales)
+    RequireOption(scale >= 0, owner + "joint_clearance_scales", scale, ">= 0");
   RequireOption(manual_spacing_m >= 0, owner + "manual_spacing_m", manual_spacing_m, ">= 0");
+}
+
+void SetBodyJoints(const std::vector<Vector3d>& body_joints, CorrespondencePlacementOptions* options) {
+  constexpr double kSpineClearanceScale = 2.0;
+  options->joint_positions.clear();
+  options->joint_clearance_scales.clear();
+  for (int j = 0; j < static_cast<int>(body_joints.size()); ++j) {
+    if (!JointJoinsSegments(j)) continue;
+    options->joint_positions.push_back(body_joints[j]);
+    options->joint_clearance_scales.push_back(j == kJointSpine ? kSpineClearanceScale : 1.0);
+  }
 }
 
 namespace {
@@ -67,7 +82,7 @@ std::vector<int> RingPlan(int segment, const CorrespondencePlacementOptions& o) 
   switch (static_cast<BodySegment>(segment)) {
     case BodySegment::kHead: return {L + 2};
     case BodySegment::kNeck: return {L};
-    case BodySegment::kUpperTorso: return {L + 2, L + 2, D};   // dense at the shoulders
+    case BodySegment::kUpperTorso: return {L + 2, D};          // dense at the shoulders
     case BodySegment::kLowerTorso: return {L + 2, D};          // dense at the hips
     case BodySegment::kLeftThigh:
     case BodySegment::kRightThigh: return {(L + D) / 2, L};    // denser at the lap
@@ -186,24 +201,37 @@ Correspondences PlaceCorrespondences(const Mesh& template_mesh, const Mesh& scan
     // Short segments (neck, hands, feet) keep some markers: the clearance is at most 15% of
     // the segment's extent.
     const double segment_clearance = std::min(clearance, 0.15 * (g.z_hi - g.z_lo));
-    for (const Vector3d& j : joints) {
-      const Vector3d v = c - j;
+    for (std::size_t k = 0; k < joints.size(); ++k) {
+      const Vector3d v = c - joints[k];
       const double axial = v.dot(g.axis);
       const double radial = (v - g.axis * axial).norm();
       const double distance = radial < 1.5 * g.radius ? std::abs(axial) : v.norm();
-      if (distance < segment_clearance) return false;
+      const double joint_scale = k < options.joint_clearance_scales.size() ? options.joint_clearance_scales[k] : 1.0;
+      if (distance < segment_clearance * joint_scale) return false;
     }
     for (const Vector3d& m : manual_points)
       if ((m - c).norm() < options.manual_spacing_m * unit) return false;
     const Vector3d n = template_normals.row(f);
     if (n.isZero()) return false;
+    // Covered: another segment's surface lies just outside along the normal. Buried: the face
+    // lies inside another segment (the first surface of it along the normal is left, not
+    // entered), as a torso's cap inside the other torso part, where no scan surface is near.
     const Vector3d origin = c + 1e-6 * unit * n;
+    std::array<double, kNumBodySegments> nearest;
+    std::array<bool, kNumBodySegments> leaving{};
+    nearest.fill(std::numeric_limits<double>::infinity());
     for (int h = 0; h < nt; ++h) {
-      if (template_mesh.face_labels[h] == s) continue;
+      const int other = template_mesh.face_labels[h];
+      if (other == s) continue;
       const double t = LineHit(template_mesh, h, origin, n);
-      if (t >= 0 && t < 2.0 * max_distance) return false;
+      if (!(t >= 0)) continue;
+      if (t < 2.0 * max_distance) return false;
+      if (other >= 0 && other < kNumBodySegments && t < nearest[other]) {
+        nearest[other] = t;
+        leaving[other] = template_normals.row(h).dot(n) > 0;
+      }
     }
-    return true;
+    return std::none_of(leaving.begin(), leaving.end(), [](bool inside) { return inside; });
   };
 
   const Vector3d scan_centre = body_centre;

@@ -22,9 +22,12 @@ struct CorrespondencePlacementOptions {
   // segment's ends): nearer markers give a sharper bend of the skin at the joint (Figure 4).
   // On short segments it is at most 15% of the segment's extent, so that they keep markers.
   double joint_clearance_m = 0.05;
-  // The template's joint positions (mesh units, the template mesh's frame); empty: estimated at
-  // both ends of each segment's axis, one local radius inside.
+  // The positions of the joints where two segments meet (mesh units, the template mesh's frame;
+  // SetBodyJoints below). Empty: estimated at both ends of each segment's axis, one local radius
+  // inside.
   std::vector<Eigen::Vector3d> joint_positions;
+  // The clearance of each joint of joint_positions, times joint_clearance_m (missing: 1).
+  std::vector<double> joint_clearance_scales;
   double metres_per_unit = 1.0;       // size of one mesh unit (0.1 for decimetres)
   int limb_ring_markers = 6;          // markers per ring on the limbs, neck and head
   int dense_ring_markers = 10;        // markers per ring at the shoulders and at the hips/lap
@@ -35,6 +38,12 @@ struct CorrespondencePlacementOptions {
   // Throws UsageError for out-of-range values.
   void Check() const;
 };
+
+// Sets `options`' joints from the body's 22 joint positions (core/body_model.h order): only those
+// where two segments meet (JointJoinsSegments; a joint inside a segment, the pelvis or the chest,
+// would clear a band of it of markers for no bend), the spine's clearance doubled (the skin of the
+// lower back and the belly bends over a longer stretch than at a limb's joint).
+void SetBodyJoints(const std::vector<Eigen::Vector3d>& body_joints, CorrespondencePlacementOptions* options);
 
 // template_mesh: the posed template in the registered reference pose, face_labels = segment ids
 // (core/body_segments.h names). Returns pairs with segment labels; `manual` pairs (may be null) are

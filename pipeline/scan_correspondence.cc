@@ -141,7 +141,7 @@ ScanCorrespondence CorrespondTemplateToScan(const BodyTemplate& body, const Mesh
   CorrespondencePlacementOptions placement;
   placement.joint_clearance_m = options.joint_clearance_m;
   placement.metres_per_unit = result.registration.metres_per_unit;
-  placement.joint_positions = body.JointPositions(shape, result.registration.pose);
+  SetBodyJoints(body.JointPositions(shape, result.registration.pose), &placement);
   result.correspondences =
       PlaceCorrespondences(result.reference, scan, placement, options.manual_path.empty() ? nullptr : &manual);
   ValidateCorrespondences(result.correspondences, template_faces, scan_faces, scan_path);

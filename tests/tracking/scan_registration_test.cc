@@ -320,5 +320,47 @@ TEST(CorrespondencePlacement, StudioActorGets140To220PairsOnAll16Segments) {
   EXPECT_EQ(completed.pairs[0].segment, pairs.pairs[0].segment);
 }
 
+// The lower torso's upper ring of markers lies on the belly and the lower back, between the hips
+// and the waist: the template's lower torso reaches into the upper torso, and a ring placed on
+// that buried cap found no scan surface (one marker of eight, the rest between the legs), so the
+// pelvis turned with the thighs and the chest in the transfer. No torso marker is nearer the spine
+// joint than twice the clearance.
+TEST(CorrespondencePlacement, TheLowerTorsoIsHeldAboveTheHipsFrontAndBack) {
+  StudioActorOptions actor_options;
+  actor_options.target_triangles = 12000;
+  const StudioActor actor = BuildStudioActor(actor_options);
+  const BodyTemplate body;
+  const ScanRegistration registration = RegisterTemplateToScan(body, actor.mesh);
+  const auto joints = body.JointPositions(registration.shape, registration.pose);
+  const Mesh template_mesh = body.PosedMesh(registration.shape, registration.pose);
+  CorrespondencePlacementOptions options;
+  SetBodyJoints(joints, &options);
+  const Correspondences pairs = PlaceCorrespondences(template_mesh, actor.mesh, options);
+  const Vector3d hips = 0.5 * (joints[kJointLeftHip] + joints[kJointRightHip]);
+  const Vector3d up = (joints[kJointSpine] - hips).normalized();
+  const Vector3d forward = up.cross(joints[kJointLeftHip] - joints[kJointRightHip]).normalized();
+  const double waist = (joints[kJointSpine] - hips).dot(up);
+  int front = 0, back = 0, between_the_legs = 0;
+  for (const CorrespondencePair& p : pairs.pairs) {
+    if (p.segment != "lower_torso" && p.segment != "upper_torso") continue;
+    const Vector3d c = (template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 0)) +
+                        template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 1)) +
+                        template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 2))).transpose() / 3.0;
+    // The spine's clearance is twice a limb joint's, on both torso parts (5 mm spared: the
+    // placement measures along the trunk's axis, head to pelvis, not hips to spine).
+    EXPECT_GE(std::abs((c - joints[kJointSpine]).dot(up)), 2.0 * options.joint_clearance_m - 0.005) << p.segment;
+    if (p.segment != "lower_torso") continue;
+    const double height = (c - hips).dot(up);
+    if (height < 0) {
+      ++between_the_legs;
+      continue;
+    }
+    EXPECT_LT(height, waist) << "a lower torso marker above the spine joint";
+    ((c - hips).dot(forward) > 0 ? front : back) += 1;
+  }
+  EXPECT_GE(front, 3) << "back " << back << ", between the legs " << between_the_legs;
+  EXPECT_GE(back, 3) << "front " << front << ", between the legs " << between_the_legs;
+}
+
 }  // namespace
 }  // namespace confluent
