@@ -9,6 +9,7 @@
 #include <cmath>
 #include <fstream>
 #include <set>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -266,20 +267,37 @@ TEST(PoseFromJoints, RecoversAPoseFromItsJointsAndRotations) {
   EXPECT_NEAR(fitted.dofs[kJointHead][2], 0.5, 1e-3);
 }
 
-TEST(CorrespondencePlacement, StudioActorGets140To220PairsOnAll16Segments) {
+// The (low-resolution) studio actor and the template registered to it: its joints and its
+// posed mesh.
+struct RegisteredActor {
+  StudioActor actor;
+  ScanRegistration registration;
+  std::vector<Vector3d> joints;
+  Mesh template_mesh;
+};
+
+RegisteredActor RegisterTemplateToStudioActor() {
   StudioActorOptions actor_options;
   actor_options.target_triangles = 12000;
-  const StudioActor actor = BuildStudioActor(actor_options);
+  RegisteredActor result{BuildStudioActor(actor_options), {}, {}, {}};
   const BodyTemplate body;
-  const ScanRegistration registration = RegisterTemplateToScan(body, actor.mesh);
-  EXPECT_LT(registration.trimmed_rms_residual_m, 0.02);
+  result.registration = RegisterTemplateToScan(body, result.actor.mesh);
+  result.joints = body.JointPositions(result.registration.shape, result.registration.pose);
+  result.template_mesh = body.PosedMesh(result.registration.shape, result.registration.pose);
+  return result;
+}
+
+TEST(CorrespondencePlacement, StudioActorGets140To220PairsOnAll16Segments) {
+  const RegisteredActor registered = RegisterTemplateToStudioActor();
+  const StudioActor& actor = registered.actor;
+  const auto& joints = registered.joints;
+  const Mesh& template_mesh = registered.template_mesh;
+  EXPECT_LT(registered.registration.trimmed_rms_residual_m, 0.02);
   // The studio actor's rest skeleton is the template's generic one: joints should agree.
-  const auto joints = body.JointPositions(registration.shape, registration.pose);
   const auto truth = actor.skeleton.RestPositions();
   EXPECT_LT((joints[kJointLeftElbow] - truth[kJointLeftElbow]).norm(), 0.05);
   EXPECT_LT((joints[kJointRightKnee] - truth[kJointRightKnee]).norm(), 0.05);
 
-  const Mesh template_mesh = body.PosedMesh(registration.shape, registration.pose);
   CorrespondencePlacementOptions options;
   options.joint_positions = joints;
   const Correspondences pairs = PlaceCorrespondences(template_mesh, actor.mesh, options);
@@ -326,16 +344,12 @@ TEST(CorrespondencePlacement, StudioActorGets140To220PairsOnAll16Segments) {
 // pelvis turned with the thighs and the chest in the transfer. No torso marker is nearer the spine
 // joint than twice the clearance.
 TEST(CorrespondencePlacement, TheLowerTorsoIsHeldAboveTheHipsFrontAndBack) {
-  StudioActorOptions actor_options;
-  actor_options.target_triangles = 12000;
-  const StudioActor actor = BuildStudioActor(actor_options);
-  const BodyTemplate body;
-  const ScanRegistration registration = RegisterTemplateToScan(body, actor.mesh);
-  const auto joints = body.JointPositions(registration.shape, registration.pose);
-  const Mesh template_mesh = body.PosedMesh(registration.shape, registration.pose);
+  const RegisteredActor registered = RegisterTemplateToStudioActor();
+  const auto& joints = registered.joints;
+  const Mesh& template_mesh = registered.template_mesh;
   CorrespondencePlacementOptions options;
   SetBodyJoints(joints, &options);
-  const Correspondences pairs = PlaceCorrespondences(template_mesh, actor.mesh, options);
+  const Correspondences pairs = PlaceCorrespondences(template_mesh, registered.actor.mesh, options);
   const Vector3d hips = 0.5 * (joints[kJointLeftHip] + joints[kJointRightHip]);
   const Vector3d up = (joints[kJointSpine] - hips).normalized();
   const Vector3d forward = up.cross(joints[kJointLeftHip] - joints[kJointRightHip]).normalized();
