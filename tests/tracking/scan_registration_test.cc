@@ -19,6 +19,7 @@
 #include "core/skinning.h"
 #include "deform/correspondence_placement.h"
 #include "studio/actor.h"
+#include "tests/deform/test_geometry.h"
 #include "studio/motion.h"
 #include "tests/support/test_support.h"
 #include "tracking/pose_from_joints.h"
@@ -323,9 +324,7 @@ TEST(CorrespondencePlacement, StudioActorGets140To220PairsOnAll16Segments) {
   const Vector3d axis = (elbow - shoulder).normalized();
   for (const CorrespondencePair& p : pairs.pairs) {
     if (p.segment != "left_upper_arm") continue;
-    const Vector3d c = (template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 0)) +
-                        template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 1)) +
-                        template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 2))).transpose() / 3.0;
+    const Vector3d c = testing::FaceCentroid(template_mesh, p.template_triangle);
     EXPECT_GE(std::abs((c - elbow).dot(axis)), options.joint_clearance_m - 1e-9);
   }
   // A partial manual file is kept and completed.
@@ -357,9 +356,7 @@ TEST(CorrespondencePlacement, TheLowerTorsoIsHeldAboveTheHipsFrontAndBack) {
   int front = 0, back = 0, between_the_legs = 0;
   for (const CorrespondencePair& p : pairs.pairs) {
     if (p.segment != "lower_torso" && p.segment != "upper_torso") continue;
-    const Vector3d c = (template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 0)) +
-                        template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 1)) +
-                        template_mesh.vertices.row(template_mesh.faces(p.template_triangle, 2))).transpose() / 3.0;
+    const Vector3d c = testing::FaceCentroid(template_mesh, p.template_triangle);
     // The spine's clearance is twice a limb joint's, on both torso parts (5 mm spared: the
     // placement measures along the trunk's axis, head to pelvis, not hips to spine).
     EXPECT_GE(std::abs((c - joints[kJointSpine]).dot(up)), 2.0 * options.joint_clearance_m - 0.005) << p.segment;
