@@ -101,6 +101,8 @@ BENCHMARK(BM_SilhouetteRefineFrame)->Unit(benchmark::kMillisecond)->UseRealTime(
 // `run --photo-rounds 8 --photo-full-res-rounds 3`).
 BENCHMARK(BM_PhotoRefineFrame)
     ->Args({1, 5, 0})
+    ->Args({1, 5, 1})
+    ->Args({1, 5, 2})
     ->Args({0, 5, 0})
     ->Args({1, 8, 3})
     ->Args({0, 8, 0})
