@@ -12,6 +12,8 @@ build=(
   libopenimageio-dev openimageio-tools nlohmann-json3-dev libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   ffmpeg xvfb xauth python3
+  # bench/geometry_error.py and its test (tests/bench/).
+  python3-numpy python3-scipy
   # export/: glTF compression and decimation; the web player's three.js comes from npm (below),
   # and its tests drive Debian's chromium (headless, SwiftShader WebGL) and the Khronos validator.
   libmeshoptimizer-dev nodejs chromium

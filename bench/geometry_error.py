@@ -154,44 +154,42 @@ def main():
     heaviest = heaviest_joint_names(skin)
     region_masks = {r: np.array([bool(re.search(p, n)) for n in heaviest]) for r, p in REGIONS.items()}
 
+    # One pass over the frames: each frame's offsets are measured once, for the table (every N-th frame) and for
+    # every group's copy (each frame).
+    work = args.work or args.run.rstrip("/") + ".geometry"
+    group_weights = {g: None if g == "truth" else joint_weights(skin, GROUPS[g]) for g in groups}
+    for group in groups:
+        linked_copy(args.run, os.path.join(work, group))
     print("| frame | all | " + " | ".join(REGIONS) + " |")
     print("|---" * (len(REGIONS) + 2) + "|")
     means = []
-    for frame, path in frame_files(args.run, (first, last), args.every):
+    for frame, path in frame_files(args.run, (first, last), 1 if groups else args.every):
+        in_table = (frame - first) % args.every == 0
+        scan = Ply(path)
         truth = Ply(os.path.join(truth_dir, "meshes", os.path.basename(path)))
-        offsets, _ = normal_offsets(Ply(path).xyz(), truth)
-        offsets *= 1000.0
-        means.append(np.abs(offsets).mean())
-        cells = [f"{offsets[m].mean():+.1f} / {np.abs(offsets[m]).mean():.1f}" for m in region_masks.values()]
-        print(f"| {frame} | {means[-1]:.2f} | " + " | ".join(cells) + " |")
+        scan_xyz = scan.xyz()
+        offsets, normals = normal_offsets(scan_xyz, truth)
+        if in_table:
+            mm = 1000.0 * offsets
+            means.append(np.abs(mm).mean())
+            cells = [f"{mm[m].mean():+.1f} / {np.abs(mm[m]).mean():.1f}" for m in region_masks.values()]
+            print(f"| {frame} | {means[-1]:.2f} | " + " | ".join(cells) + " |", flush=True)
+        for group, weights in group_weights.items():
+            xyz = truth.xyz() if weights is None else scan_xyz - (weights * offsets)[:, None] * normals
+            scan.write(os.path.join(work, group, "scan", os.path.basename(path)), xyz)
     print(f"\nmean |offset along the true normal| {np.mean(means):.2f} mm (cells: signed mean / mean of |offset|, mm; "
           "+ = the scan outside the truth)")
 
-    if not groups:
-        return
-    work = args.work or args.run.rstrip("/") + ".geometry"
-    results = {}
     for group in groups:
         out = os.path.join(work, group)
-        linked_copy(args.run, out)
-        weights = None if group == "truth" else joint_weights(skin, GROUPS[group])
-        for frame, path in frame_files(args.run, (first, last), 1):
-            scan = Ply(path)
-            truth = Ply(os.path.join(truth_dir, "meshes", os.path.basename(path)))
-            if weights is None:
-                xyz = truth.xyz()
-            else:
-                offsets, normals = normal_offsets(scan.xyz(), truth)
-                xyz = scan.xyz() - (weights * offsets)[:, None] * normals
-            scan.write(os.path.join(out, "scan", os.path.basename(path)), xyz)
         command = [args.confluent, "evaluate", args.capture, "--run", out, "--masks", os.path.join(truth_dir, "masks"),
                    "--side-by-side-every", "0"] + (["--frames", args.frames] if args.frames else [])
         with open(os.path.join(work, group + ".log"), "w") as log:
             if subprocess.run(command, stdout=log, stderr=subprocess.STDOUT).returncode != 0:
                 sys.exit(f"evaluate failed on {out} (see {work}/{group}.log)")
-        results[group] = json.load(open(os.path.join(out, "metrics.json")))["scan"]
-        print(f"{group}: PSNR {results[group]['psnr_db_mean']:.2f} dB, inside both silhouettes "
-              f"{results[group]['psnr_inside_db_mean']:.2f} dB, IoU {results[group]['iou_mean']:.4f}", flush=True)
+        scan = json.load(open(os.path.join(out, "metrics.json")))["scan"]
+        print(f"{group}: PSNR {scan['psnr_db_mean']:.2f} dB, inside both silhouettes "
+              f"{scan['psnr_inside_db_mean']:.2f} dB, IoU {scan['iou_mean']:.4f}", flush=True)
 
 
 if __name__ == "__main__":

@@ -19,8 +19,8 @@
 #include "core/skinning.h"
 #include "deform/correspondence_placement.h"
 #include "studio/actor.h"
-#include "tests/deform/test_geometry.h"
 #include "studio/motion.h"
+#include "tests/deform/test_geometry.h"
 #include "tests/support/test_support.h"
 #include "tracking/pose_from_joints.h"
 
