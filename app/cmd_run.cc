@@ -1,6 +1,7 @@
 // confluent run CAPTURE [--scan S] [--correspondences C] [--exclude-camera NAME]... [--frames A:B]
 // --out RUN: capture to 3D video, every stage resumable.
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -37,7 +38,9 @@ int RunRun(const ParsedArgs& args, const Context& context) {
   options.refine_photo = !args.has("no-photo-refine");
   options.photo_rounds = args.get_int("photo-rounds", options.photo_rounds);
   if (options.photo_rounds < 1 || options.photo_rounds > 20) throw UsageError("--photo-rounds: must be within [1, 20]");
-  options.photo_full_resolution_rounds = args.get_int("photo-full-res-rounds", options.photo_full_resolution_rounds);
+  // Fewer rounds than the default full-resolution ones: all of them at full resolution.
+  options.photo_full_resolution_rounds =
+      args.get_int("photo-full-res-rounds", std::min(options.photo_full_resolution_rounds, options.photo_rounds));
   if (options.photo_full_resolution_rounds < 0 || options.photo_full_resolution_rounds > options.photo_rounds)
     throw UsageError("--photo-full-res-rounds: must be within [0, --photo-rounds = " + std::to_string(options.photo_rounds) + "]");
   options.landmarks = !args.has("no-landmarks");
@@ -93,7 +96,7 @@ CommandSpec MakeRunCommand() {
       {"refine-keyframes", "N", "refine only every N-th frame from its deformation, the others from the previous frame's correction in fewer rounds (default 1)"},
       {"no-photo-refine", "", "skip the photo-consistency refinement that follows the silhouette refinement"},
       {"photo-rounds", "N", "rounds of the photo-consistency refinement per frame (default 5)"},
-      {"photo-full-res-rounds", "N", "of those, the last N measure the flow between cameras at full resolution instead of half: slower, sharper texture (default 0; e.g. 8 and 3)"},
+      {"photo-full-res-rounds", "N", "of those, the last N measure the flow between cameras at full resolution instead of half: sharper texture on fine patterns (default 2, or all of fewer rounds)"},
       GirthInflationOptionSpec(),
       {"no-landmarks", "", "track from the silhouettes alone, without BlazePose's body landmarks (first frame, lost limbs, every 5th frame)"},
       {"no-render", "", "skip the 3D-video render stage"},

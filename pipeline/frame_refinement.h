@@ -27,7 +27,7 @@ struct FrameRefinementOptions {
   bool photo = true;             // the photo-consistency refinement and the outline rounds after it
   int silhouette_rounds = 18;    // at a keyframe
   int photo_rounds = 5;          // at a keyframe
-  int photo_full_resolution_rounds = 0;  // PhotoRefinementOptions::full_resolution_rounds
+  int photo_full_resolution_rounds = 2;  // PhotoRefinementOptions::full_resolution_rounds
   int outline_rounds = 6;        // silhouette rounds after the photo refinement
   int keyframe_interval = 1;     // 1: every frame starts from its deformation
   int carried_silhouette_rounds = 6;  // the rounds of a frame that starts from the carried correction

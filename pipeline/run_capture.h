@@ -29,7 +29,7 @@ struct RunOptions {
   int refine_keyframes = 1;            // RunInputs::refine_keyframes
   bool refine_photo = true;
   int photo_rounds = 5;                // RunInputs::photo_rounds
-  int photo_full_resolution_rounds = 0;  // RunInputs::photo_full_resolution_rounds
+  int photo_full_resolution_rounds = 2;  // RunInputs::photo_full_resolution_rounds
   bool landmarks = true;               // RunInputs::landmarks
   std::optional<double> girth_inflation;  // TrackerOptions::InflateGirthsAlways; absent: the tracker's automatic default
   bool render = true;                  // the orbit 3D video

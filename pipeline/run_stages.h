@@ -37,7 +37,7 @@ struct RunInputs {
   int refine_keyframes = 1;
   bool refine_photo = true;          // then make neighbouring used cameras agree on the texture
   int photo_rounds = 5;              // FrameRefinementOptions::photo_rounds
-  int photo_full_resolution_rounds = 0;  // of those, the last ones with the flow at full resolution
+  int photo_full_resolution_rounds = 2;  // of those, the last ones with the flow at full resolution
   TrackerOptions tracker;            // of the tracking stage
   // BlazePose's landmarks settle limbs the silhouettes leave ambiguous, at the first frame and
   // where a limb seems lost (pipeline/frame_landmarks.h; skipped with a note without Node.js).

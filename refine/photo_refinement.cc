@@ -32,7 +32,13 @@ void PhotoRefinementOptions::Check() const {
   RequireOption(outline_margin_px >= 0, owner + "outline_margin_px", outline_margin_px, ">= 0");
   RequireOption(flow_finest_scale >= 0, owner + "flow_finest_scale", flow_finest_scale, ">= 0");
   RequireOption(full_resolution_rounds >= 0, owner + "full_resolution_rounds", full_resolution_rounds, ">= 0");
+  RequireOption(full_resolution_spread_stiffness > 0.0, owner + "full_resolution_spread_stiffness",
+                full_resolution_spread_stiffness, "> 0");
+  RequireOption(full_resolution_patch_stride >= 1, owner + "full_resolution_patch_stride", full_resolution_patch_stride,
+                ">= 1");
   RequireOption(flow_variational_iterations >= 0, owner + "flow_variational_iterations", flow_variational_iterations, ">= 0");
+  RequireOption(full_resolution_variational_iterations >= 0, owner + "full_resolution_variational_iterations",
+                full_resolution_variational_iterations, ">= 0");
   RequireOption(threads >= 1, owner + "threads", threads, ">= 1");
 }
 
@@ -89,7 +95,9 @@ struct OffsetSums {
 struct PhotoRefiner::Impl {
   PhotoRefinementOptions options;
   RowMatrixX3i faces;
-  std::unique_ptr<NormalisedDiffusion> spread;
+  std::unique_ptr<NormalisedDiffusion> spread;       // the half-resolution rounds' offsets
+  // The full-resolution rounds' offsets; null without such rounds or when the stiffnesses agree.
+  std::unique_ptr<NormalisedDiffusion> fine_spread;
   std::unique_ptr<CpuRasterizer> rasterizer;
 
   // Camera `a` against neighbour `b`: b's image reprojected into a through the surface, the flow
@@ -150,6 +158,7 @@ struct PhotoRefiner::Impl {
     // photo-refinement time than the medium preset, held-out PSNR within 0.02 dB (issue 23).
     cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_FAST);
     dis->setFinestScale(finest_scale);
+    if (finest_scale == 0) dis->setPatchStride(options.full_resolution_patch_stride);
     dis->setVariationalRefinementIterations(variational_iterations);
     dis->calc(warped, real, flow);
     // Where b's colour landed in a: the surface point both saw lies on a's ray through that pixel
@@ -183,6 +192,11 @@ PhotoRefiner::PhotoRefiner(const Mesh& scan, const PhotoRefinementOptions& optio
   if (scan.num_faces() == 0) throw InputError("scan", "photo refinement: the scan has no faces");
   impl_->spread = std::make_unique<NormalisedDiffusion>(scan, options.spread_stiffness, "scan");
   impl_->spread->set_threads(options.threads);
+  const bool full_resolution = options.full_resolution_rounds > 0 || options.flow_finest_scale == 0;
+  if (full_resolution && options.full_resolution_spread_stiffness != options.spread_stiffness) {
+    impl_->fine_spread = std::make_unique<NormalisedDiffusion>(scan, options.full_resolution_spread_stiffness, "scan");
+    impl_->fine_spread->set_threads(options.threads);
+  }
   impl_->rasterizer = std::make_unique<CpuRasterizer>(scan.faces, scan.num_vertices());
 }
 
@@ -265,12 +279,14 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
     };
     const RowMatrixX3d face_normals = FaceNormals(mesh);
     const int finest_scale = round >= num_rounds - s.options.full_resolution_rounds ? 0 : s.options.flow_finest_scale;
+    const int last_iterations =
+        finest_scale == 0 ? s.options.full_resolution_variational_iterations : s.options.flow_variational_iterations;
     std::vector<OffsetSums> sums(threads, OffsetSums(n));
     auto measure = [&](int part) {
       for (std::size_t i = part; i < pairs.size(); i += threads) {
         const auto [a, b] = round % 2 == 0 ? pairs[i] : std::make_pair(pairs[i].second, pairs[i].first);
-        s.MeasurePair(views[a], views[b], face_normals, finest_scale,
-                      round == num_rounds - 1 ? s.options.flow_variational_iterations : 0, &sums[part]);
+        s.MeasurePair(views[a], views[b], face_normals, finest_scale, round == num_rounds - 1 ? last_iterations : 0,
+                      &sums[part]);
       }
     };
     in_parallel(draw);
@@ -297,7 +313,8 @@ RowMatrixX3d PhotoRefiner::Refine(const RowMatrixX3d& vertices, const std::vecto
     summary.samples += samples;
     summary.rounds = round + 1;
     if (samples == 0) break;
-    const Eigen::MatrixXd spread = s.spread->Spread(offsets, measured, s.options.fade_weight);
+    const NormalisedDiffusion& diffusion = finest_scale == 0 && s.fine_spread ? *s.fine_spread : *s.spread;
+    const Eigen::MatrixXd spread = diffusion.Spread(offsets, measured, s.options.fade_weight);
     const RowMatrixX3d normals = VertexNormals(mesh);
     for (int v = 0; v < n; ++v) current.row(v) += s.options.step_gain * spread(v, 0) * normals.row(v);
   }

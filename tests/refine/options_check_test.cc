@@ -30,6 +30,15 @@ TEST(RefineOptions, CheckNamesTheFieldAndTheValue) {
   photo = PhotoRefinementOptions();
   photo.full_resolution_rounds = -1;
   testing::ExpectCheckRefuses(photo, "PhotoRefinementOptions.full_resolution_rounds = -1: must be >= 0");
+  photo = PhotoRefinementOptions();
+  photo.full_resolution_spread_stiffness = 0.0;
+  testing::ExpectCheckRefuses(photo, "PhotoRefinementOptions.full_resolution_spread_stiffness = 0: must be > 0");
+  photo = PhotoRefinementOptions();
+  photo.full_resolution_patch_stride = 0;
+  testing::ExpectCheckRefuses(photo, "PhotoRefinementOptions.full_resolution_patch_stride = 0: must be >= 1");
+  photo = PhotoRefinementOptions();
+  photo.full_resolution_variational_iterations = -2;
+  testing::ExpectCheckRefuses(photo, "PhotoRefinementOptions.full_resolution_variational_iterations = -2: must be >= 0");
   EXPECT_THROW(NormalisedDiffusion(MakeUvSphere(1.0, 6, 12), 0.0, "sphere"), UsageError);
 }
 
