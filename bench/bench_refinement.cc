@@ -97,8 +97,9 @@ void BM_ScanSilhouetteOneCamera(benchmark::State& state) {
 BENCHMARK(BM_ScanSilhouetteOneCamera)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SilhouetteRefineFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
 // Arguments: the flow's finest pyramid level (1, the default: half resolution; 0: full), the
-// rounds (default 5) and how many of the last ones measure at full resolution (default 0;
-// `run --photo-rounds 8 --photo-full-res-rounds 3`).
+// rounds (default 5) and how many of the last ones measure at full resolution (default 2 since
+// 2026-12-06; `run --photo-rounds 8 --photo-full-res-rounds 3`). The sphere is small in the images,
+// which understates the full-resolution rounds' cost on a body: bench_photo_studio.
 BENCHMARK(BM_PhotoRefineFrame)
     ->Args({1, 5, 0})
     ->Args({1, 5, 1})

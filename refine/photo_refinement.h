@@ -44,23 +44,23 @@ struct PhotoRefinementOptions {
   int flow_finest_scale = 1;
   // The last rounds measure the flow at full resolution instead (finest scale 0): the coarse
   // rounds bring the surface near, the fine ones place it to a fraction of a full-size pixel.
-  // 2 of the default 5: +0.23 to +0.50 dB held-out PSNR on four performances at the studio's size,
-  // for 5% more photo-refinement time (2026-12-06, bench/SUITE.md).
+  // 2 of the default 5: +0.25 to +0.54 dB held-out PSNR on four performances at the studio's size,
+  // for 1.26x the photo refinement's time per frame (2026-12-06, bench/SUITE.md, bench_photo_studio).
   int full_resolution_rounds = 2;
   // The full-resolution rounds' offsets are less noisy than the half-resolution ones, so they are
   // spread more locally (a fold beside the arm, a crease at the waist), over about
   // 1 / sqrt(full_resolution_spread_stiffness) edges.
   double full_resolution_spread_stiffness = 0.03;
   // DIS's patch stride at full resolution (the fast preset's 4, as at half resolution). 6 places
-  // 2.25x fewer patches: the photo refinement 1.08x the time of five half-resolution rounds
-  // instead of 1.27x, for 0.04-0.05 dB less held-out PSNR (2026-12-06).
+  // 2.25x fewer patches: the photo refinement 1.07x the time of five half-resolution rounds
+  // instead of 1.26x, for 0.04-0.05 dB less held-out PSNR (2026-12-06).
   int full_resolution_patch_stride = 4;
   // Iterations of DIS's variational refinement of the flow, in the last round only: the earlier
   // rounds' moves are measured again by the next round (the fast preset's 5 in every round: 27%
   // more photo-refinement time for +0.01 dB held-out PSNR on the studio default, 2026-11-26).
   int flow_variational_iterations = 5;
-  // The same when the last round is at full resolution: there the refinement cost a third more
-  // photo-refinement time for -0.03 to +0.03 dB held-out PSNR (2026-12-06).
+  // The same when the last round is at full resolution: there 5 iterations took 1.27x the photo
+  // refinement's time for -0.03 to +0.03 dB held-out PSNR (2026-12-06).
   int full_resolution_variational_iterations = 0;
   int outline_margin_px = 3;    // pixels this close to the scan's outline in a camera are not used
   int threads = 2;              // camera pairs processed in parallel
