@@ -1,5 +1,5 @@
 // The photo refinement of one frame of the demo's capture: a body at the studio's size (8 used
-// cameras at 1024x768, the 50K-vertex scan), where bench_refinement's sphere is about 190 px
+// cameras at 1024x768, the 59K-vertex actor), where bench_refinement's sphere is about 190 px
 // across. The full-resolution flow's cost grows with the body's area in the images, so the
 // sphere understated it (2026-12-06: 1.08x on the sphere, 1.27-1.38x in the run). The first frame
 // is synthesised once into a temporary folder (not timed); the refinement starts from the true
