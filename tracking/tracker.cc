@@ -7,13 +7,13 @@
 #include <ctime>
 #include <cmath>
 #include <functional>
-#include <future>
 #include <string_view>
 
 #include "calib/camera.h"
 #include "calib/rig_check.h"  // MaskIoU
 #include "core/statistics.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "silhouette/overlap.h"
 #include "tracking/landmark_limbs.h"
 #include "tracking/limb_hypotheses.h"
@@ -411,21 +411,21 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   // first (the same poses; the first frame 14-15% sooner on two cores, bench/RESULTS.md), else after it.
   const BodyShape start_shape = BodyShape::Uniform(std::clamp(placement_.height_m, 1.0, 2.3));
   BodyShape fitted_shape = start_shape, pulled_shape = start_shape;
-  std::future<TrackedFrame> pulled_fit;
-  if (options_.fit.rest_prior_scale > 0.0)
-    pulled_fit = std::async(options_.fit.num_threads >= 2 ? std::launch::async : std::launch::deferred, [&] {
-      return FitFirstFrame(frame, masks, use, observations, start_shape, options_.fit.rest_prior_scale, &pulled_shape);
-    });
-  TrackedFrame fitted = FitFirstFrame(frame, masks, use, observations, start_shape, 0.0, &fitted_shape);
+  TrackedFrame fitted, pulled;
+  const bool try_pull = options_.fit.rest_prior_scale > 0.0;
+  ParallelFor(try_pull ? 2 : 1, options_.fit.num_threads >= 2 ? 2 : 1, [&](int fit) {
+    if (fit == 0)
+      fitted = FitFirstFrame(frame, masks, use, observations, start_shape, 0.0, &fitted_shape);
+    else
+      pulled = FitFirstFrame(frame, masks, use, observations, start_shape, options_.fit.rest_prior_scale,
+                             &pulled_shape);
+  });
   init_rest_prior_scale_ = 0.0;
-  if (pulled_fit.valid()) {
-    TrackedFrame pulled = pulled_fit.get();
-    if (pulled.mean_iou > fitted.mean_iou + options_.init_rest_pull_min_iou_gain) {
-      fitted = std::move(pulled);
-      fitted_shape = pulled_shape;
-      init_rest_prior_scale_ = options_.fit.rest_prior_scale;
-      result.flags.push_back("wrists_pulled");
-    }
+  if (try_pull && pulled.mean_iou > fitted.mean_iou + options_.init_rest_pull_min_iou_gain) {
+    fitted = std::move(pulled);
+    fitted_shape = pulled_shape;
+    init_rest_prior_scale_ = options_.fit.rest_prior_scale;
+    result.flags.push_back("wrists_pulled");
   }
   fitted.flags.insert(fitted.flags.begin(), result.flags.begin(), result.flags.end());
   result = std::move(fitted);
