@@ -97,4 +97,31 @@ std::vector<TemplatePose> LimbHypotheses(const BodyTemplate& body, const Templat
   return hypotheses;
 }
 
+std::vector<TemplatePose> ArmTwistHypotheses(const BodyTemplate& body, const TemplatePose& pose, Limb arm,
+                                             double bend_rad) {
+  if (!IsArm(arm)) return {};
+  const LimbChain chain = LimbJoints(arm);
+  const auto& rest = body.generic_rest();
+  const Vector3d bone = (rest[chain.middle] - rest[chain.root]).normalized();  // in the shoulder's rest frame
+  const auto& q = pose.dofs[chain.root];
+  const Vector3d rotation_vector(q[0], q[1], q[2]);
+  const double angle = rotation_vector.norm();
+  const Eigen::Matrix3d rotation =
+      angle > 0.0 ? Eigen::AngleAxisd(angle, rotation_vector / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  const JointDof& elbow = body.dofs()[chain.middle];
+  std::vector<TemplatePose> hypotheses;
+  for (double twist_deg : {90.0, 180.0, -90.0}) {
+    TemplatePose hypothesis = pose;
+    // Turned after the shoulder's rotation about the rest bone: the upper arm points where it did.
+    const Eigen::AngleAxisd turned(rotation * Eigen::AngleAxisd(twist_deg * kDeg, bone).toRotationMatrix());
+    const Vector3d v = turned.angle() * turned.axis();
+    hypothesis.dofs[chain.root] = {v.x(), v.y(), v.z()};
+    hypothesis.dofs[chain.middle][0] =
+        std::clamp(std::max(hypothesis.dofs[chain.middle][0], bend_rad), elbow.lower[0], elbow.upper[0]);
+    body.ClampToLimits(&hypothesis);
+    hypotheses.push_back(hypothesis);
+  }
+  return hypotheses;
+}
+
 }  // namespace confluent

@@ -30,4 +30,11 @@ LimbChain LimbJoints(Limb limb);
 // the body unchanged.
 std::vector<TemplatePose> LimbHypotheses(const BodyTemplate& body, const TemplatePose& pose, Limb limb);
 
+// `pose` with `arm`'s upper arm turned about its own axis by 90, 180 and -90 degrees and the
+// elbow bent to at least `bend_rad` (within the limits). A nearly straight arm turns about its
+// axis without changing its silhouette, so the fit keeps whatever twist it has; when the arm then
+// bends, the elbow's hinge lies in the wrong plane and the fit keeps the arm straight instead.
+std::vector<TemplatePose> ArmTwistHypotheses(const BodyTemplate& body, const TemplatePose& pose, Limb arm,
+                                             double bend_rad);
+
 }  // namespace confluent

@@ -17,8 +17,12 @@
 #include "silhouette/overlap.h"
 #include "tracking/landmark_limbs.h"
 #include "tracking/limb_hypotheses.h"
+#include "tracking/tracker_flags.h"
 
 namespace confluent {
+
+using namespace tracker_flags;
+
 namespace {
 
 using Eigen::Matrix3d;
@@ -50,17 +54,14 @@ BodyShape InflatedGirths(const BodyShape& shape, double fraction) {
 }
 
 constexpr const char* kRepeatedFrameFlag = "duplicate";
-// Flag prefixes of a limb re-placed by the limb search and by the landmarks (then the limb's name).
-constexpr const char* kLimbSearchFlag = "limb:";
-constexpr const char* kLandmarksFlag = "landmarks:";
 
-// The joints of every limb that `flags` say was re-placed ("limb:NAME", "landmarks:NAME").
+// The joints of every limb that `flags` say was re-placed ("limb:NAME", "landmarks:NAME", "twist:NAME").
 std::vector<int> ReplacedLimbJoints(const std::vector<std::string>& flags) {
   std::vector<int> joints;
   for (Limb limb : kAllLimbs) {
     const std::string name = LimbName(limb);
     for (const std::string& flag : flags)
-      if (flag == kLimbSearchFlag + name || flag == kLandmarksFlag + name) {
+      if (flag == kLimbSearchFlag + name || flag == kLandmarksFlag + name || flag == kArmTwistFlag + name) {
         const LimbChain chain = LimbJoints(limb);
         joints.insert(joints.end(), {chain.root, chain.middle, chain.end});
         break;
@@ -114,6 +115,10 @@ void TrackerOptions::Check() const {
                 init_shape_proportion_weight, ">= 0");
   RequireOption(limb_min_gain >= 0 && limb_min_gain < 1, owner + "limb_min_gain", limb_min_gain, "in [0, 1)");
   RequireOption(landmark_check_every >= 0, owner + "landmark_check_every", landmark_check_every, ">= 0");
+  RequireOption(arm_twist_every >= 0, owner + "arm_twist_every", arm_twist_every, ">= 0");
+  RequireOption(arm_twist_max_elbow_rad >= 0, owner + "arm_twist_max_elbow_rad", arm_twist_max_elbow_rad, ">= 0");
+  RequireOption(arm_twist_bend_rad >= 0, owner + "arm_twist_bend_rad", arm_twist_bend_rad, ">= 0");
+  RequireOption(arm_twist_min_gain >= 0, owner + "arm_twist_min_gain", arm_twist_min_gain, ">= 0");
   RequireOption(landmark_disagreement_m > 0, owner + "landmark_disagreement_m", landmark_disagreement_m, "> 0");
   RequireOption(landmark_min_approach_m >= 0, owner + "landmark_min_approach_m", landmark_min_approach_m, ">= 0");
   RequireOption(landmark_iou_tolerance >= 0 && landmark_iou_tolerance < 1, owner + "landmark_iou_tolerance",
@@ -155,95 +160,6 @@ std::vector<bool> Tracker::UsableCameras(const std::vector<Image>& masks, std::v
     use[c] = true;
   }
   return use;
-}
-
-TrackedFrame Tracker::FitLimbHypothesis(const TemplatePose& hypothesis, int frame, const std::vector<Image>& masks,
-                                        const std::vector<bool>& use, const SilhouetteObservations& observations) {
-  SilhouetteFitOptions fit = options_.fit;
-  fit.prior_weight = 0.2;  // towards the hypothesis itself
-  fit.coarse_to_fine = false;
-  if (!initialized_) fit.rest_prior_scale = init_rest_prior_scale_;  // as Initialize chose
-  TrackedFrame candidate;
-  candidate.frame = frame;
-  candidate.pose = hypothesis;
-  candidate.fit = FitTemplateToSilhouettes(body_, observations, fit, &shape_, &candidate.pose);
-  Evaluate(shape_, masks, use, &candidate);
-  return candidate;
-}
-
-void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
-                          const SilhouetteObservations& observations, int fits, TrackedFrame* result) {
-  for (Limb limb : kAllLimbs) {
-    std::vector<TrackedFrame> scored;
-    for (const TemplatePose& hypothesis : LimbHypotheses(body_, result->pose, limb)) {
-      TrackedFrame candidate;
-      candidate.pose = hypothesis;
-      Evaluate(shape_, masks, use, &candidate);
-      scored.push_back(std::move(candidate));
-    }
-    const int keep = std::min<int>(fits, static_cast<int>(scored.size()));
-    std::partial_sort(scored.begin(), scored.begin() + keep, scored.end(),
-                      [](const TrackedFrame& a, const TrackedFrame& b) { return a.mean_iou > b.mean_iou; });
-    for (int k = 0; k < keep; ++k) {
-      TrackedFrame candidate = FitLimbHypothesis(scored[k].pose, result->frame, masks, use, observations);
-      if (candidate.mean_iou > result->mean_iou + options_.limb_min_gain) {
-        candidate.flags = result->flags;
-        candidate.flags.push_back(kLimbSearchFlag + std::string(LimbName(limb)));
-        *result = std::move(candidate);
-      }
-    }
-  }
-}
-
-double LandmarkIouTolerance(const TrackerOptions& options, double disagreement_m) {
-  const double ramp = (disagreement_m - options.landmark_disagreement_m) /
-                      (options.landmark_full_tolerance_m - options.landmark_disagreement_m);
-  return options.landmark_iou_tolerance * std::clamp(ramp, 0.0, 1.0);
-}
-
-void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std::vector<bool>& use,
-                                     const SilhouetteObservations& observations, TrackedFrame* result) {
-  if (!landmarks_) return;
-  const std::shared_ptr<const LandmarkJoints> found = landmarks_(result->frame);
-  if (!found) return;
-  const LandmarkJoints& landmarks = *found;
-  for (Limb limb : kAllLimbs) {
-    // A skirt that hangs below the ankle hides the leg: neither the landmarks nor the silhouettes
-    // say more than the tracked leg does (on the real Tsinghua frame, turning both legs cost 0.003
-    // of held-out IoU). Under a shorter skirt the shank shows and the landmarks place it (samba's
-    // knee-length skirt: scan IoU 0.9502 -> 0.9561 with its legs turned).
-    if (SkirtHidesAnkle(body_, shape_, result->pose, limb)) continue;
-    const double before = LimbDisagreement(result->joints, landmarks, limb);
-    if (before < options_.landmark_disagreement_m) continue;  // agrees, or the landmarks do not place it
-    const double tolerance = LandmarkIouTolerance(options_, before);
-    TrackedFrame best;
-    for (const TemplatePose& hypothesis : LimbsFromLandmarks(body_, shape_, result->pose, limb, landmarks)) {
-      TrackedFrame candidate = FitLimbHypothesis(hypothesis, result->frame, masks, use, observations);
-      const double after = LimbDisagreement(candidate.joints, landmarks, limb);
-      if (after <= before - options_.landmark_min_approach_m && candidate.mean_iou >= result->mean_iou - tolerance &&
-          (best.joints.empty() || candidate.mean_iou > best.mean_iou))
-        best = std::move(candidate);
-    }
-    if (best.joints.empty()) continue;
-    best.flags = result->flags;
-    best.flags.push_back(kLandmarksFlag + std::string(LimbName(limb)));
-    *result = std::move(best);
-  }
-  const double gap = options_.landmark_hand_max_wrist_gap_m;
-  for (Limb arm : {Limb::kLeftArm, Limb::kRightArm}) {
-    const double before = HandDisagreementRad(result->joints, landmarks, arm, gap);
-    if (before < options_.landmark_hand_disagreement_rad) continue;  // agrees, or unknown
-    const std::optional<TemplatePose> hypothesis = HandFromLandmarks(body_, shape_, result->pose, arm, landmarks, gap);
-    if (!hypothesis) continue;
-    TrackedFrame candidate = FitLimbHypothesis(*hypothesis, result->frame, masks, use, observations);
-    const double after = HandDisagreementRad(candidate.joints, landmarks, arm, gap);
-    if (after > before - options_.landmark_hand_min_approach_rad ||
-        candidate.mean_iou < result->mean_iou - options_.landmark_hand_iou_tolerance)
-      continue;
-    candidate.flags = result->flags;
-    candidate.flags.push_back(kLandmarksFlag + std::string(arm == Limb::kLeftArm ? "left_hand" : "right_hand"));
-    *result = std::move(candidate);
-  }
 }
 
 void Tracker::Evaluate(const BodyShape& shape, const std::vector<Image>& masks, const std::vector<bool>& use,
@@ -433,6 +349,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   SearchSkirtShape(masks, use, observations, &result);
   if (options_.limb_search) SearchLimbs(masks, use, observations, options_.limb_fits_init, &result);
   SettleLimbsByLandmarks(masks, use, observations, &result);
+  SearchArmTwists(masks, use, observations, 3, &result);
   InflateGirths(masks, use, &result);
   result.flags.push_back("initialized");
   initialized_ = true;
@@ -573,6 +490,8 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
     if (options_.landmark_check_every > 0 && frame % options_.landmark_check_every == 0)
       SettleLimbsByLandmarks(masks, use, observations, &result);
   }
+  if (options_.arm_twist_every > 0 && frame % options_.arm_twist_every == 0)
+    SearchArmTwists(masks, use, observations, 1, &result);
   result.fruitless_search = fruitless_search_;
   history_.push_back(result.pose);
   if (history_.size() > 4) history_.erase(history_.begin());

@@ -4,6 +4,7 @@
 // velocity prediction, bad-frame detection and recovery (after Carranza et al. 2003).
 
 #include <Eigen/Core>
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <string>
@@ -109,6 +110,19 @@ struct TrackerOptions {
   // frames (0: never): a limb held wrong where the overlap does not drop (a forearm folded the
   // other way in front of the chest) is found there.
   int landmark_check_every = 5;
+  // Arm twist: a nearly straight arm turns about its own axis without changing its silhouette, so
+  // the fit keeps whatever twist it has, and when the arm bends, its elbow's hinge lies in the
+  // wrong plane and the fit keeps it straight (the pirouette's right arm: 120-175 degrees off its
+  // truth in frames 0-15, the wrist 6-7 cm off). At the first frame and every `arm_twist_every`
+  // frames, an arm whose elbow is within `arm_twist_max_elbow_rad` of straight is turned about its
+  // upper arm by 90, 180 and -90 degrees and bent to `arm_twist_bend_rad` (ArmTwistHypotheses);
+  // the first frame fits all three, later frames the one that overlaps best unfitted; a fit is
+  // kept when it raises the mean IoU by `arm_twist_min_gain` (flag `twist:<arm>`).
+  bool arm_twist_search = true;
+  int arm_twist_every = 5;
+  double arm_twist_max_elbow_rad = 20.0 * M_PI / 180.0;
+  double arm_twist_bend_rad = 30.0 * M_PI / 180.0;
+  double arm_twist_min_gain = 0.002;
   // --girth-inflation F: grow the girths by up to F whatever the first frame's overlap (0: never).
   void InflateGirthsAlways(double max_fraction) {
     girth_inflation_max = max_fraction;
@@ -199,6 +213,12 @@ class Tracker {
                                  const std::vector<bool>& use, const SilhouetteObservations& observations);
   // Re-places each limb of `result` (fitted to `observations`) where it overlaps the masks
   // better, flagging "limb:<name>" for each limb moved.
+  // The `count` of `hypotheses` (at most) that overlap the masks best as they are, best first.
+  std::vector<TemplatePose> BestUnfitted(const std::vector<TemplatePose>& hypotheses, int count,
+                                         const std::vector<Image>& masks, const std::vector<bool>& use) const;
+  // TrackerOptions::arm_twist_search: `fits` of the hypotheses, the best unfitted first.
+  void SearchArmTwists(const std::vector<Image>& masks, const std::vector<bool>& use,
+                       const SilhouetteObservations& observations, int fits, TrackedFrame* result);
   void SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
                    const SilhouetteObservations& observations, int fits, TrackedFrame* result);
   // Turns each limb of `result` that disagrees with the landmarks of its frame towards them, then
