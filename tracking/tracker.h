@@ -113,7 +113,7 @@ struct TrackerOptions {
   // Arm twist: a nearly straight arm turns about its own axis without changing its silhouette, so
   // the fit keeps whatever twist it has, and when the arm bends, its elbow's hinge lies in the
   // wrong plane and the fit keeps it straight (the pirouette's right arm: 120-175 degrees off its
-  // truth in frames 0-15, the wrist 6-7 cm off). At the first frame and every `arm_twist_every`
+  // truth in frames 0-15, the wrist 4-8 cm off). At the first frame and every `arm_twist_every`
   // frames, an arm whose elbow is within `arm_twist_max_elbow_rad` of straight is turned about its
   // upper arm by 90, 180 and -90 degrees and bent to `arm_twist_bend_rad` (ArmTwistHypotheses);
   // the first frame fits all three, later frames the one that overlaps best unfitted; a fit is
@@ -211,14 +211,14 @@ class Tracker {
   // `hypothesis` fitted to `observations` (pulled towards itself, all segments at once) and scored.
   TrackedFrame FitLimbHypothesis(const TemplatePose& hypothesis, int frame, const std::vector<Image>& masks,
                                  const std::vector<bool>& use, const SilhouetteObservations& observations);
-  // Re-places each limb of `result` (fitted to `observations`) where it overlaps the masks
-  // better, flagging "limb:<name>" for each limb moved.
   // The `count` of `hypotheses` (at most) that overlap the masks best as they are, best first.
   std::vector<TemplatePose> BestUnfitted(const std::vector<TemplatePose>& hypotheses, int count,
                                          const std::vector<Image>& masks, const std::vector<bool>& use) const;
   // TrackerOptions::arm_twist_search: `fits` of the hypotheses, the best unfitted first.
   void SearchArmTwists(const std::vector<Image>& masks, const std::vector<bool>& use,
                        const SilhouetteObservations& observations, int fits, TrackedFrame* result);
+  // Re-places each limb of `result` (fitted to `observations`) where it overlaps the masks
+  // better, flagging "limb:<name>" for each limb moved.
   void SearchLimbs(const std::vector<Image>& masks, const std::vector<bool>& use,
                    const SilhouetteObservations& observations, int fits, TrackedFrame* result);
   // Turns each limb of `result` that disagrees with the landmarks of its frame towards them, then
