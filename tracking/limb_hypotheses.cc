@@ -103,17 +103,13 @@ std::vector<TemplatePose> ArmTwistHypotheses(const BodyTemplate& body, const Tem
   const LimbChain chain = LimbJoints(arm);
   const auto& rest = body.generic_rest();
   const Vector3d bone = (rest[chain.middle] - rest[chain.root]).normalized();  // in the shoulder's rest frame
-  const auto& q = pose.dofs[chain.root];
-  const Vector3d rotation_vector(q[0], q[1], q[2]);
-  const double angle = rotation_vector.norm();
-  const Eigen::Matrix3d rotation =
-      angle > 0.0 ? Eigen::AngleAxisd(angle, rotation_vector / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d rotation = tracking_internal::LocalRotation(body.dofs()[chain.root], pose.dofs[chain.root].data());
   const JointDof& elbow = body.dofs()[chain.middle];
   std::vector<TemplatePose> hypotheses;
   for (double twist_deg : {90.0, 180.0, -90.0}) {
     TemplatePose hypothesis = pose;
     // Turned after the shoulder's rotation about the rest bone: the upper arm points where it did.
-    const Eigen::AngleAxisd turned(rotation * Eigen::AngleAxisd(twist_deg * kDeg, bone).toRotationMatrix());
+    const Eigen::AngleAxisd turned(rotation * tracking_internal::AxisRotation(bone, twist_deg * kDeg));
     const Vector3d v = turned.angle() * turned.axis();
     hypothesis.dofs[chain.root] = {v.x(), v.y(), v.z()};
     hypothesis.dofs[chain.middle][0] =
