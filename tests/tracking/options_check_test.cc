@@ -49,6 +49,12 @@ TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
   tracker.limb_search_repeat_rise = 0.9;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.limb_search_repeat_rise = 0.9: must be >= 1");
   tracker = TrackerOptions();
+  tracker.arm_twist_every = -1;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.arm_twist_every = -1: must be >= 0");
+  tracker = TrackerOptions();
+  tracker.arm_twist_bend_rad = -1;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.arm_twist_bend_rad = -1: must be >= 0");
+  tracker = TrackerOptions();
   tracker.limb_search_repeat_drop = -0.1;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.limb_search_repeat_drop = -0.1: must be in [0, 1)");
   tracker = TrackerOptions();
