@@ -120,4 +120,19 @@ std::vector<TemplatePose> ArmTwistHypotheses(const BodyTemplate& body, const Tem
   return hypotheses;
 }
 
+std::vector<TemplatePose> HandBends(const BodyTemplate& body, const TemplatePose& pose, Limb arm,
+                                    const std::vector<double>& flex_deg) {
+  if (!IsArm(arm)) return {};
+  const int wrist = LimbJoints(arm).end;
+  std::vector<TemplatePose> bent;
+  for (double flex : flex_deg) {
+    TemplatePose hypothesis = pose;
+    hypothesis.dofs[wrist][0] = flex * kDeg;
+    hypothesis.dofs[wrist][1] = 0.0;
+    body.ClampToLimits(&hypothesis);
+    bent.push_back(hypothesis);
+  }
+  return bent;
+}
+
 }  // namespace confluent

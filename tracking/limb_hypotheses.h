@@ -37,4 +37,12 @@ std::vector<TemplatePose> LimbHypotheses(const BodyTemplate& body, const Templat
 std::vector<TemplatePose> ArmTwistHypotheses(const BodyTemplate& body, const TemplatePose& pose, Limb arm,
                                              double bend_rad);
 
+// `pose` with the hand of `arm` bent at the wrist to each of `flex_deg` (about the wrist's
+// flexion axis, within its limits; no sideways bend). A limb turned onto new joints keeps its old
+// wrist angles, so its hand may point out of the silhouettes, and the fit then folds the forearm
+// to hide the hand (the Indian dance's hands turned in before the chest: the refitted wrist
+// 11 cm from the truth it started on).
+std::vector<TemplatePose> HandBends(const BodyTemplate& body, const TemplatePose& pose, Limb arm,
+                                    const std::vector<double>& flex_deg);
+
 }  // namespace confluent

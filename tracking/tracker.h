@@ -85,7 +85,10 @@ struct TrackerOptions {
   // or more from them is turned towards them (tracking/landmark_limbs.h) and fitted again, and
   // kept when its end comes `landmark_min_approach_m` closer and the mean IoU falls by no more
   // than `landmark_iou_tolerance` (silhouettes hardly tell a forearm folded forward from one
-  // folded back; the landmarks do). A refit that ends where it started is not kept: on the
+  // folded back; the landmarks do), or when it comes any closer and raises the mean IoU by
+  // `limb_min_gain` (BlazePose misplaced the Indian dance's wrists, folded before the chest, by
+  // 7-10 cm: the fit that found the true wrist came only 2.8 cm closer to theirs, for +0.013 of
+  // IoU). A refit that ends where it started is not kept: on the
   // suite, keeping those (a few mm closer) let the heavy body's arms drift (joint error max
   // 3.3 -> 12.2 cm). A leg whose ankle a fitted skirt hides is left to the silhouettes.
   double landmark_disagreement_m = 0.08;
@@ -95,6 +98,10 @@ struct TrackerOptions {
   // distance: BlazePose's wrists lay 9-14 cm inside the forward jumps' arms held in front of the
   // chest, and turning a wrist that was 6 cm off onto them lost 0.006 of IoU (and 10 cm).
   double landmark_full_tolerance_m = 0.16;
+  // An arm turned onto the landmarks gets the hand, among these bends at the wrist (degrees of
+  // flexion) and the one it had, that overlaps the masks best before the fit (HandBends; empty:
+  // the hand it had).
+  std::vector<double> landmark_hand_flex_deg = {-60.0, -30.0, 0.0, 30.0, 60.0};
   // Hands: one pointing `landmark_hand_disagreement_rad` or more away from the landmarks' hand
   // (their wrist to their knuckles) is turned at the wrist onto it and fitted again, and kept when
   // it comes `landmark_hand_min_approach_rad` closer and the mean IoU falls by no more than

@@ -1,0 +1,100 @@
+// An arm turned onto the landmarks takes the hand that fits the silhouettes (HandBends in
+// tracking/limb_hypotheses.h, TrackerOptions::landmark_hand_flex_deg). Ground truth: the template
+// with its upper arms spread, the left forearm folded before the chest and the hand bent further
+// in at the wrist (the Indian dance's pose), its own silhouettes, and landmarks that place the
+// wrist 8 cm off, as BlazePose does there. The tracker holds the forearm folded too far with a
+// straight hand.
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "tests/support/camera_ring.h"
+#include "tests/support/template_masks.h"
+#include "tracking/limb_hypotheses.h"
+#include "tracking/tracker.h"
+
+namespace confluent {
+namespace {
+
+constexpr double kRadPerDegree = M_PI / 180.0;
+
+// Both upper arms spread sideways; the left elbow flexed `elbow_deg` (forwards, towards the
+// chest) and the left wrist `wrist_deg` further.
+TemplatePose ArmsSpreadLeftFolded(const BodyTemplate& body, double elbow_deg, double wrist_deg) {
+  TemplatePose pose;
+  pose.root_rotation = Eigen::Vector3d(0, 0, 0.3);
+  pose.dofs[kJointLeftShoulder] = testing::ArmTowards(body, kJointLeftShoulder, Eigen::Vector3d(-1, 0, -0.1));
+  pose.dofs[kJointRightShoulder] = testing::ArmTowards(body, kJointRightShoulder, Eigen::Vector3d(1, 0, -0.1));
+  pose.dofs[kJointLeftElbow] = {elbow_deg * kRadPerDegree, 0, 0};
+  pose.dofs[kJointLeftWrist] = {wrist_deg * kRadPerDegree, 0, 0};
+  return pose;
+}
+
+TEST(HandBends, BendTheHandAtTheWristAndNothingElse) {
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(1.75);
+  TemplatePose pose = ArmsSpreadLeftFolded(body, 100, 0);
+  pose.dofs[kJointLeftWrist][1] = 0.2;  // bent sideways too
+  const std::vector<Eigen::Vector3d> joints = body.JointPositions(shape, pose);
+  const std::vector<TemplatePose> bent = HandBends(body, pose, Limb::kLeftArm, {-40, 0, 40, 120});
+  ASSERT_EQ(bent.size(), 4u);
+  const JointDof& wrist = body.dofs()[kJointLeftWrist];
+  EXPECT_NEAR(bent[0].dofs[kJointLeftWrist][0], -40 * kRadPerDegree, 1e-12);
+  EXPECT_NEAR(bent[2].dofs[kJointLeftWrist][0], 40 * kRadPerDegree, 1e-12);
+  EXPECT_NEAR(bent[3].dofs[kJointLeftWrist][0], wrist.upper[0], 1e-12);  // within the limits
+  for (const TemplatePose& hypothesis : bent) {
+    EXPECT_EQ(hypothesis.dofs[kJointLeftWrist][1], 0.0);  // no sideways bend
+    const std::vector<Eigen::Vector3d> moved = body.JointPositions(shape, hypothesis);
+    for (int j = 0; j < kNumTemplateJoints; ++j) {
+      if (j == kJointLeftHandEnd) continue;
+      EXPECT_LT((moved[j] - joints[j]).norm(), 1e-12) << BodyJointNames()[j];
+    }
+  }
+  // The straight hand continues the forearm; 40 degrees of flexion turn it by 40.
+  const std::vector<Eigen::Vector3d> straight = body.JointPositions(shape, bent[1]);
+  const std::vector<Eigen::Vector3d> flexed = body.JointPositions(shape, bent[2]);
+  const Eigen::Vector3d forearm = (straight[kJointLeftWrist] - straight[kJointLeftElbow]).normalized();
+  const Eigen::Vector3d hand = (flexed[kJointLeftHandEnd] - flexed[kJointLeftWrist]).normalized();
+  EXPECT_NEAR((straight[kJointLeftHandEnd] - straight[kJointLeftWrist]).normalized().dot(forearm), 1.0, 1e-9);
+  EXPECT_NEAR(std::acos(hand.dot(forearm)), 40 * kRadPerDegree, 1e-6);
+  EXPECT_TRUE(HandBends(body, pose, Limb::kLeftLeg, {0, 40}).empty());
+}
+
+// The truth: the left forearm folded 105 degrees, the hand bent 60 degrees further in. The
+// tracker held the forearm straight out, or folded 150 degrees with the hand bent out. Turned onto
+// the landmarks' wrist with the hand it had, the hand points out of the silhouettes and the fit
+// folds the forearm away again; with the hand bent as the silhouettes say, the fit finds the
+// true wrist.
+TEST(HandBends, AForearmTurnedOntoMisplacedLandmarksFindsTheTrueWristWithItsHand) {
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(1.75);
+  const Rig rig = testing::CameraRing(8, 200, 150);
+  const TemplatePose truth = ArmsSpreadLeftFolded(body, 105, 60);
+  const std::vector<Image> masks = testing::TemplateMasks(body, shape, truth, rig);
+  const std::vector<Eigen::Vector3d> true_joints = body.JointPositions(shape, truth);
+  LandmarkJoints landmarks = testing::TemplateLandmarks(body, shape, truth);
+  // Misplaced towards the elbow and up, 8 cm.
+  landmarks.position[kJointLeftWrist] += 0.08 * Eigen::Vector3d(-0.6, -0.6, 0.5).normalized();
+  auto track = [&](const TemplatePose& held, const std::vector<double>& flex_deg, std::string* flags) {
+    TrackerOptions options;
+    options.landmark_hand_flex_deg = flex_deg;
+    Tracker tracker(rig, {}, options);
+    tracker.UseLandmarks([&](int) { return std::make_shared<const LandmarkJoints>(landmarks); });
+    tracker.Resume(shape, {held, held}, std::vector<double>(10, 0.0), {});  // nothing to drop from
+    const TrackedFrame result = tracker.Track(10, masks);                  // a landmark check
+    for (const std::string& flag : result.flags) *flags += flag + " ";
+    return (result.joints[kJointLeftWrist] - true_joints[kJointLeftWrist]).norm();
+  };
+  for (const TemplatePose& held : {ArmsSpreadLeftFolded(body, 0, 0), ArmsSpreadLeftFolded(body, 150, -60)}) {
+    std::string with_flags, without_flags;
+    EXPECT_LT(track(held, TrackerOptions{}.landmark_hand_flex_deg, &with_flags), 0.02) << with_flags;
+    EXPECT_NE(with_flags.find("landmarks:left_arm"), std::string::npos) << with_flags;
+    EXPECT_GT(track(held, {}, &without_flags), 0.1) << without_flags;
+  }
+}
+
+}  // namespace
+}  // namespace confluent
