@@ -121,6 +121,8 @@ void TrackerOptions::Check() const {
   RequireOption(arm_twist_min_gain >= 0, owner + "arm_twist_min_gain", arm_twist_min_gain, ">= 0");
   RequireOption(landmark_disagreement_m > 0, owner + "landmark_disagreement_m", landmark_disagreement_m, "> 0");
   RequireOption(landmark_min_approach_m >= 0, owner + "landmark_min_approach_m", landmark_min_approach_m, ">= 0");
+  RequireOption(landmark_hand_rebend_min_rad >= 0, owner + "landmark_hand_rebend_min_rad", landmark_hand_rebend_min_rad,
+                ">= 0");
   for (double flex : landmark_hand_flex_deg)
     RequireOption(std::abs(flex) <= 180, owner + "landmark_hand_flex_deg", flex, "in [-180, 180]");
   RequireOption(landmark_iou_tolerance >= 0 && landmark_iou_tolerance < 1, owner + "landmark_iou_tolerance",

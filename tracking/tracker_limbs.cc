@@ -2,6 +2,7 @@
 // landmarks, and arms turned about their own axis (tracking/tracker.h).
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -103,7 +104,8 @@ void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std:
     const double tolerance = LandmarkIouTolerance(options_, before);
     TrackedFrame best;
     for (TemplatePose hypothesis : LimbsFromLandmarks(body_, shape_, result->pose, limb, landmarks)) {
-      if (IsArm(limb) && !options_.landmark_hand_flex_deg.empty()) {
+      if (IsArm(limb) && !options_.landmark_hand_flex_deg.empty() &&
+          std::abs(hypothesis.dofs[LimbJoints(limb).end][0]) >= options_.landmark_hand_rebend_min_rad) {
         std::vector<TemplatePose> hands = HandBends(body_, hypothesis, limb, options_.landmark_hand_flex_deg);
         hands.push_back(hypothesis);
         hypothesis = BestUnfitted(hands, 1, masks, use).front();

@@ -2,8 +2,8 @@
 // tracking/limb_hypotheses.h, TrackerOptions::landmark_hand_flex_deg). Ground truth: the template
 // with its upper arms spread, the left forearm folded before the chest and the hand bent further
 // in at the wrist (the Indian dance's pose), its own silhouettes, and landmarks that place the
-// wrist 8 cm off, as BlazePose does there. The tracker holds the forearm folded too far with a
-// straight hand.
+// wrist 8 cm off, as BlazePose does there. The tracker holds the forearm elsewhere, the hand bent
+// the other way.
 
 #include <gtest/gtest.h>
 
@@ -64,10 +64,10 @@ TEST(HandBends, BendTheHandAtTheWristAndNothingElse) {
 }
 
 // The truth: the left forearm folded 105 degrees, the hand bent 60 degrees further in. The
-// tracker held the forearm straight out, or folded 150 degrees with the hand bent out. Turned onto
-// the landmarks' wrist with the hand it had, the hand points out of the silhouettes and the fit
-// folds the forearm away again; with the hand bent as the silhouettes say, the fit finds the
-// true wrist.
+// tracker held the forearm straight out or folded 150 degrees, the hand bent 60 degrees out.
+// Turned onto the landmarks' wrist with the hand it had, the hand points out of the silhouettes
+// and the fit folds the forearm away again; with the hand bent as the silhouettes say, the fit
+// finds the true wrist.
 TEST(HandBends, AForearmTurnedOntoMisplacedLandmarksFindsTheTrueWristWithItsHand) {
   const BodyTemplate body;
   const BodyShape shape = BodyShape::Uniform(1.75);
@@ -88,12 +88,18 @@ TEST(HandBends, AForearmTurnedOntoMisplacedLandmarksFindsTheTrueWristWithItsHand
     for (const std::string& flag : result.flags) *flags += flag + " ";
     return (result.joints[kJointLeftWrist] - true_joints[kJointLeftWrist]).norm();
   };
-  for (const TemplatePose& held : {ArmsSpreadLeftFolded(body, 0, 0), ArmsSpreadLeftFolded(body, 150, -60)}) {
+  for (const TemplatePose& held : {ArmsSpreadLeftFolded(body, 0, -60), ArmsSpreadLeftFolded(body, 150, -60)}) {
     std::string with_flags, without_flags;
     EXPECT_LT(track(held, TrackerOptions{}.landmark_hand_flex_deg, &with_flags), 0.02) << with_flags;
     EXPECT_NE(with_flags.find("landmarks:left_arm"), std::string::npos) << with_flags;
     EXPECT_GT(track(held, {}, &without_flags), 0.1) << without_flags;
   }
+  // A hand bent less than landmark_hand_rebend_min_rad (45 degrees) keeps its bend: the same
+  // frame as without the bends.
+  std::string a, b;
+  const TemplatePose slightly_bent = ArmsSpreadLeftFolded(body, 150, -20);
+  EXPECT_DOUBLE_EQ(track(slightly_bent, TrackerOptions{}.landmark_hand_flex_deg, &a), track(slightly_bent, {}, &b));
+  EXPECT_EQ(a, b);
 }
 
 }  // namespace
