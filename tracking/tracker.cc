@@ -121,10 +121,10 @@ void TrackerOptions::Check() const {
   RequireOption(arm_twist_min_gain >= 0, owner + "arm_twist_min_gain", arm_twist_min_gain, ">= 0");
   RequireOption(landmark_disagreement_m > 0, owner + "landmark_disagreement_m", landmark_disagreement_m, "> 0");
   RequireOption(landmark_min_approach_m >= 0, owner + "landmark_min_approach_m", landmark_min_approach_m, ">= 0");
-  RequireOption(landmark_hand_rebend_min_rad >= 0, owner + "landmark_hand_rebend_min_rad", landmark_hand_rebend_min_rad,
+  RequireOption(hand_rebend_min_rad >= 0, owner + "hand_rebend_min_rad", hand_rebend_min_rad,
                 ">= 0");
-  for (double flex : landmark_hand_flex_deg)
-    RequireOption(std::abs(flex) <= 180, owner + "landmark_hand_flex_deg", flex, "in [-180, 180]");
+  for (double flex : hand_rebend_flex_deg)
+    RequireOption(std::abs(flex) <= 180, owner + "hand_rebend_flex_deg", flex, "in [-180, 180]");
   RequireOption(landmark_iou_tolerance >= 0 && landmark_iou_tolerance < 1, owner + "landmark_iou_tolerance",
                 landmark_iou_tolerance, "in [0, 1)");
   RequireOption(landmark_full_tolerance_m > landmark_disagreement_m, owner + "landmark_full_tolerance_m",

@@ -15,6 +15,7 @@
 #include "tracking/body_template.h"
 #include "tracking/hull_placement.h"
 #include "tracking/landmark_joints.h"
+#include "tracking/limb_hypotheses.h"
 #include "tracking/silhouette_fit.h"
 #include "tracking/skirt_search.h"
 
@@ -98,15 +99,16 @@ struct TrackerOptions {
   // distance: BlazePose's wrists lay 9-14 cm inside the forward jumps' arms held in front of the
   // chest, and turning a wrist that was 6 cm off onto them lost 0.006 of IoU (and 10 cm).
   double landmark_full_tolerance_m = 0.16;
-  // An arm turned onto the landmarks whose hand is bent `landmark_hand_rebend_min_rad` or more at
-  // the wrist gets the hand, among these bends (degrees of flexion) and the one it had, that
-  // overlaps the masks best before the fit (HandBends; empty: the hand it had). The bend was the
-  // fit's for the forearm's old place: the Indian dance's hands, bent 67-73 degrees outwards
-  // there, pointed out of the silhouettes, and the refit folded the forearm away again. A hand
-  // bent less is kept (on the tiny builtin capture, straightening one bent 16 degrees changed
-  // nothing at its frame, 0.0002 of IoU, but set the next frames on another course).
-  std::vector<double> landmark_hand_flex_deg = {-60.0, -30.0, 0.0, 30.0, 60.0};
-  double landmark_hand_rebend_min_rad = 45.0 * M_PI / 180.0;
+  // An arm re-placed (turned onto the landmarks, or to a canonical placement by the lost-limb
+  // search) whose hand is bent `hand_rebend_min_rad` or more at the wrist gets the hand, among
+  // these bends (degrees of flexion) and the one it had, that overlaps the masks best before the
+  // fit (HandBends; empty: the hand it had). The bend was the fit's for the forearm's old place:
+  // the Indian dance's hands, bent 67-73 degrees outwards there, pointed out of the silhouettes,
+  // and the refit folded the forearm away again. A hand bent less is kept (on the tiny builtin
+  // capture, straightening one bent 16 degrees changed nothing at its frame, 0.0002 of IoU, but
+  // set the next frames on another course).
+  std::vector<double> hand_rebend_flex_deg = {-60.0, -30.0, 0.0, 30.0, 60.0};
+  double hand_rebend_min_rad = 45.0 * M_PI / 180.0;
   // Hands: one pointing `landmark_hand_disagreement_rad` or more away from the landmarks' hand
   // (their wrist to their knuckles) is turned at the wrist onto it and fitted again, and kept when
   // it comes `landmark_hand_min_approach_rad` closer and the mean IoU falls by no more than
@@ -226,6 +228,9 @@ class Tracker {
   // The `count` of `hypotheses` (at most) that overlap the masks best as they are, best first.
   std::vector<TemplatePose> BestUnfitted(const std::vector<TemplatePose>& hypotheses, int count,
                                          const std::vector<Image>& masks, const std::vector<bool>& use) const;
+  // `pose` with the hand of `arm` re-bent where it overlaps best (TrackerOptions::hand_rebend_flex_deg).
+  TemplatePose WithBestHand(const TemplatePose& pose, Limb arm, const std::vector<Image>& masks,
+                            const std::vector<bool>& use) const;
   // TrackerOptions::arm_twist_search: `fits` of the hypotheses, the best unfitted first.
   void SearchArmTwists(const std::vector<Image>& masks, const std::vector<bool>& use,
                        const SilhouetteObservations& observations, int fits, TrackedFrame* result);

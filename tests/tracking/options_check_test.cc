@@ -55,11 +55,11 @@ TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
   tracker.arm_twist_bend_rad = -1;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.arm_twist_bend_rad = -1: must be >= 0");
   tracker = TrackerOptions();
-  tracker.landmark_hand_flex_deg = {0, 200};
-  testing::ExpectCheckRefuses(tracker, "TrackerOptions.landmark_hand_flex_deg = 200: must be in [-180, 180]");
+  tracker.hand_rebend_flex_deg = {0, 200};
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.hand_rebend_flex_deg = 200: must be in [-180, 180]");
   tracker = TrackerOptions();
-  tracker.landmark_hand_rebend_min_rad = -1;
-  testing::ExpectCheckRefuses(tracker, "TrackerOptions.landmark_hand_rebend_min_rad = -1: must be >= 0");
+  tracker.hand_rebend_min_rad = -1;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.hand_rebend_min_rad = -1: must be >= 0");
   tracker = TrackerOptions();
   tracker.limb_search_repeat_drop = -0.1;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.limb_search_repeat_drop = -0.1: must be in [0, 1)");

@@ -1,9 +1,9 @@
-// An arm turned onto the landmarks takes the hand that fits the silhouettes (HandBends in
-// tracking/limb_hypotheses.h, TrackerOptions::landmark_hand_flex_deg). Ground truth: the template
-// with its upper arms spread, the left forearm folded before the chest and the hand bent further
-// in at the wrist (the Indian dance's pose), its own silhouettes, and landmarks that place the
-// wrist 8 cm off, as BlazePose does there. The tracker holds the forearm elsewhere, the hand bent
-// the other way.
+// An arm re-placed by the landmarks or the lost-limb search takes the hand that fits the
+// silhouettes (HandBends in tracking/limb_hypotheses.h, TrackerOptions::hand_rebend_flex_deg).
+// Ground truth: the template with its upper arms spread, the left forearm folded before the
+// chest and the hand bent further in at the wrist (the Indian dance's pose), its own silhouettes,
+// and landmarks that place the wrist 8 cm off, as BlazePose does there. The tracker holds the
+// forearm elsewhere, the hand bent the other way.
 
 #include <gtest/gtest.h>
 
@@ -63,43 +63,77 @@ TEST(HandBends, BendTheHandAtTheWristAndNothingElse) {
   EXPECT_TRUE(HandBends(body, pose, Limb::kLeftLeg, {0, 40}).empty());
 }
 
+// Eight cameras see the template with the left forearm folded 105 degrees and the hand bent 60
+// degrees further in.
+struct FoldedHandScene {
+  BodyTemplate body;
+  BodyShape shape = BodyShape::Uniform(1.75);
+  Rig rig = testing::CameraRing(8, 200, 150);
+  TemplatePose truth = ArmsSpreadLeftFolded(body, 105, 60);
+  std::vector<Image> masks = testing::TemplateMasks(body, shape, truth, rig);
+  Eigen::Vector3d true_wrist = body.JointPositions(shape, truth)[kJointLeftWrist];
+};
+
 // The truth: the left forearm folded 105 degrees, the hand bent 60 degrees further in. The
 // tracker held the forearm straight out or folded 150 degrees, the hand bent 60 degrees out.
 // Turned onto the landmarks' wrist with the hand it had, the hand points out of the silhouettes
 // and the fit folds the forearm away again; with the hand bent as the silhouettes say, the fit
 // finds the true wrist.
 TEST(HandBends, AForearmTurnedOntoMisplacedLandmarksFindsTheTrueWristWithItsHand) {
-  const BodyTemplate body;
-  const BodyShape shape = BodyShape::Uniform(1.75);
-  const Rig rig = testing::CameraRing(8, 200, 150);
-  const TemplatePose truth = ArmsSpreadLeftFolded(body, 105, 60);
-  const std::vector<Image> masks = testing::TemplateMasks(body, shape, truth, rig);
-  const std::vector<Eigen::Vector3d> true_joints = body.JointPositions(shape, truth);
-  LandmarkJoints landmarks = testing::TemplateLandmarks(body, shape, truth);
+  const FoldedHandScene scene;
+  const BodyTemplate& body = scene.body;
+  const BodyShape& shape = scene.shape;
+  LandmarkJoints landmarks = testing::TemplateLandmarks(body, shape, scene.truth);
   // Misplaced towards the elbow and up, 8 cm.
   landmarks.position[kJointLeftWrist] += 0.08 * Eigen::Vector3d(-0.6, -0.6, 0.5).normalized();
   auto track = [&](const TemplatePose& held, const std::vector<double>& flex_deg, std::string* flags) {
     TrackerOptions options;
-    options.landmark_hand_flex_deg = flex_deg;
-    Tracker tracker(rig, {}, options);
+    options.hand_rebend_flex_deg = flex_deg;
+    Tracker tracker(scene.rig, {}, options);
     tracker.UseLandmarks([&](int) { return std::make_shared<const LandmarkJoints>(landmarks); });
     tracker.Resume(shape, {held, held}, std::vector<double>(10, 0.0), {});  // nothing to drop from
-    const TrackedFrame result = tracker.Track(10, masks);                  // a landmark check
+    const TrackedFrame result = tracker.Track(10, scene.masks);            // a landmark check
     for (const std::string& flag : result.flags) *flags += flag + " ";
-    return (result.joints[kJointLeftWrist] - true_joints[kJointLeftWrist]).norm();
+    return (result.joints[kJointLeftWrist] - scene.true_wrist).norm();
   };
   for (const TemplatePose& held : {ArmsSpreadLeftFolded(body, 0, -60), ArmsSpreadLeftFolded(body, 150, -60)}) {
     std::string with_flags, without_flags;
-    EXPECT_LT(track(held, TrackerOptions{}.landmark_hand_flex_deg, &with_flags), 0.02) << with_flags;
+    EXPECT_LT(track(held, TrackerOptions{}.hand_rebend_flex_deg, &with_flags), 0.02) << with_flags;
     EXPECT_NE(with_flags.find("landmarks:left_arm"), std::string::npos) << with_flags;
     EXPECT_GT(track(held, {}, &without_flags), 0.1) << without_flags;
   }
-  // A hand bent less than landmark_hand_rebend_min_rad (45 degrees) keeps its bend: the same
+  // A hand bent less than hand_rebend_min_rad (45 degrees) keeps its bend: the same
   // frame as without the bends.
   std::string a, b;
   const TemplatePose slightly_bent = ArmsSpreadLeftFolded(body, 150, -20);
-  EXPECT_DOUBLE_EQ(track(slightly_bent, TrackerOptions{}.landmark_hand_flex_deg, &a), track(slightly_bent, {}, &b));
+  EXPECT_DOUBLE_EQ(track(slightly_bent, TrackerOptions{}.hand_rebend_flex_deg, &a), track(slightly_bent, {}, &b));
   EXPECT_EQ(a, b);
+}
+
+// The same without landmarks: the frame's overlap falls below the frames before, and the
+// lost-limb search's canonical placements (arm spread, forearm bent 90 degrees) find the fold
+// only with the hand re-bent.
+TEST(HandBends, TheLostLimbSearchFindsTheFoldedForearmWithItsHand) {
+  const FoldedHandScene scene;
+  const BodyTemplate& body = scene.body;
+  auto track = [&](const TemplatePose& held, const std::vector<double>& flex_deg, std::string* flags) {
+    TrackerOptions options;
+    options.hand_rebend_flex_deg = flex_deg;
+    // The template's own silhouettes: the wrong forearm still overlaps 0.983-0.985, so the frames
+    // before were explained fully and a smaller drop sets the search off.
+    options.limb_search_drop = 0.005;
+    Tracker tracker(scene.rig, {}, options);
+    tracker.Resume(scene.shape, {held, held}, std::vector<double>(10, 1.0), {});
+    const TrackedFrame result = tracker.Track(11, scene.masks);
+    for (const std::string& flag : result.flags) *flags += flag + " ";
+    return (result.joints[kJointLeftWrist] - scene.true_wrist).norm();
+  };
+  for (const TemplatePose& held : {ArmsSpreadLeftFolded(body, 0, -60), ArmsSpreadLeftFolded(body, 150, -60)}) {
+    std::string with_flags, without_flags;
+    EXPECT_LT(track(held, TrackerOptions{}.hand_rebend_flex_deg, &with_flags), 0.02) << with_flags;
+    EXPECT_NE(with_flags.find("limb:left_arm"), std::string::npos) << with_flags;
+    EXPECT_GT(track(held, {}, &without_flags), 0.1) << without_flags;
+  }
 }
 
 }  // namespace
