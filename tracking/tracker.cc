@@ -121,8 +121,7 @@ void TrackerOptions::Check() const {
   RequireOption(arm_twist_min_gain >= 0, owner + "arm_twist_min_gain", arm_twist_min_gain, ">= 0");
   RequireOption(landmark_disagreement_m > 0, owner + "landmark_disagreement_m", landmark_disagreement_m, "> 0");
   RequireOption(landmark_min_approach_m >= 0, owner + "landmark_min_approach_m", landmark_min_approach_m, ">= 0");
-  RequireOption(hand_rebend_min_rad >= 0, owner + "hand_rebend_min_rad", hand_rebend_min_rad,
-                ">= 0");
+  RequireOption(hand_rebend_min_rad >= 0, owner + "hand_rebend_min_rad", hand_rebend_min_rad, ">= 0");
   for (double flex : hand_rebend_flex_deg)
     RequireOption(std::abs(flex) <= 180, owner + "hand_rebend_flex_deg", flex, "in [-180, 180]");
   RequireOption(landmark_iou_tolerance >= 0 && landmark_iou_tolerance < 1, owner + "landmark_iou_tolerance",

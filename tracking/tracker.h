@@ -89,9 +89,8 @@ struct TrackerOptions {
   // folded back; the landmarks do), or when it comes any closer and raises the mean IoU by
   // `limb_min_gain` (BlazePose misplaced the Indian dance's wrists, folded before the chest, by
   // 7-10 cm: the fit that found the true wrist came only 2.8 cm closer to theirs, for +0.013 of
-  // IoU). A refit that ends where it started is not kept: on the
-  // suite, keeping those (a few mm closer) let the heavy body's arms drift (joint error max
-  // 3.3 -> 12.2 cm). A leg whose ankle a fitted skirt hides is left to the silhouettes.
+  // IoU). A refit that ends where it started is not kept: on the suite, keeping those (a few mm
+  // closer) let the heavy body's arms drift (joint error max 3.3 -> 12.2 cm). A leg whose ankle a fitted skirt hides is left to the silhouettes.
   double landmark_disagreement_m = 0.08;
   double landmark_min_approach_m = 0.04;
   double landmark_iou_tolerance = 0.015;
@@ -228,7 +227,8 @@ class Tracker {
   // The `count` of `hypotheses` (at most) that overlap the masks best as they are, best first.
   std::vector<TemplatePose> BestUnfitted(const std::vector<TemplatePose>& hypotheses, int count,
                                          const std::vector<Image>& masks, const std::vector<bool>& use) const;
-  // `pose` with the hand of `arm` re-bent where it overlaps best (TrackerOptions::hand_rebend_flex_deg).
+  // `pose` with the hand of `arm` re-bent where it overlaps best (TrackerOptions::hand_rebend_flex_deg);
+  // `pose` itself for a leg or a hand bent less than hand_rebend_min_rad.
   TemplatePose WithBestHand(const TemplatePose& pose, Limb arm, const std::vector<Image>& masks,
                             const std::vector<bool>& use) const;
   // TrackerOptions::arm_twist_search: `fits` of the hypotheses, the best unfitted first.

@@ -48,7 +48,8 @@ std::vector<TemplatePose> Tracker::BestUnfitted(const std::vector<TemplatePose>&
 
 TemplatePose Tracker::WithBestHand(const TemplatePose& pose, Limb arm, const std::vector<Image>& masks,
                                    const std::vector<bool>& use) const {
-  if (options_.hand_rebend_flex_deg.empty() || std::abs(pose.dofs[LimbJoints(arm).end][0]) < options_.hand_rebend_min_rad)
+  if (!IsArm(arm) || options_.hand_rebend_flex_deg.empty() ||
+      std::abs(pose.dofs[LimbJoints(arm).end][0]) < options_.hand_rebend_min_rad)
     return pose;
   std::vector<TemplatePose> hands = HandBends(body_, pose, arm, options_.hand_rebend_flex_deg);
   hands.push_back(pose);
@@ -59,8 +60,7 @@ void Tracker::SearchLimbs(const std::vector<Image>& masks, const std::vector<boo
                           const SilhouetteObservations& observations, int fits, TrackedFrame* result) {
   for (Limb limb : kAllLimbs) {
     std::vector<TemplatePose> placements = LimbHypotheses(body_, result->pose, limb);
-    if (IsArm(limb))
-      for (TemplatePose& placement : placements) placement = WithBestHand(placement, limb, masks, use);
+    for (TemplatePose& placement : placements) placement = WithBestHand(placement, limb, masks, use);
     for (const TemplatePose& hypothesis : BestUnfitted(placements, fits, masks, use)) {
       TrackedFrame candidate = FitLimbHypothesis(hypothesis, result->frame, masks, use, observations);
       if (candidate.mean_iou > result->mean_iou + options_.limb_min_gain) {
@@ -116,7 +116,7 @@ void Tracker::SettleLimbsByLandmarks(const std::vector<Image>& masks, const std:
     const double tolerance = LandmarkIouTolerance(options_, before);
     TrackedFrame best;
     for (TemplatePose hypothesis : LimbsFromLandmarks(body_, shape_, result->pose, limb, landmarks)) {
-      if (IsArm(limb)) hypothesis = WithBestHand(hypothesis, limb, masks, use);
+      hypothesis = WithBestHand(hypothesis, limb, masks, use);
       TrackedFrame candidate = FitLimbHypothesis(hypothesis, result->frame, masks, use, observations);
       const double after = LimbDisagreement(candidate.joints, landmarks, limb);
       // Closer to the landmarks for the same overlap, or a little closer for a better one (a
