@@ -67,6 +67,29 @@ std::vector<std::string> EssentialJoints() {
   return names;
 }
 
+// The turn about `upper` (the upper arm's unit direction at the target's rest) that takes the
+// elbow's mean flexion axis over `poses` onto the target's hinge, the body's `lateral` axis made
+// perpendicular to the bone (the tracking template's elbow hinge). 0 when the elbow bends past
+// 20 degrees in fewer than 10 frames, or its axis wanders (the mean of the unit axes shorter than
+// 0.8: not a hinge).
+double ElbowHingeTurn(const std::vector<Pose>& poses, int elbow, const Vector3d& upper, const Vector3d& lateral) {
+  Vector3d sum = Vector3d::Zero();
+  int bent = 0;
+  for (const Pose& pose : poses) {
+    const Eigen::AngleAxisd bend(pose.local_rotations[elbow]);
+    if (bend.angle() < 20.0 * M_PI / 180.0) continue;
+    sum += bend.axis();
+    ++bent;
+  }
+  if (bent < 10 || sum.norm() < 0.8 * bent) return 0.0;
+  const Vector3d axis = (sum - sum.dot(upper) * upper).normalized();
+  Vector3d hinge = lateral - lateral.dot(upper) * upper;
+  if (!(axis.allFinite() && hinge.norm() > 1e-9)) return 0.0;
+  hinge.normalize();
+  if (hinge.dot(axis) < 0) hinge = -hinge;  // the shorter turn: flexion stays towards the front
+  return std::atan2(hinge.cross(axis).dot(upper), hinge.dot(axis));
+}
+
 // The rotation R that best maps the unit vectors `from` onto `to` (Kabsch). A single pair or
 // collinear vectors leave the twist about them open: then the rotation nearest `prior` (the
 // minimal swing after `prior`). Empty input: identity.
@@ -122,6 +145,7 @@ struct UnitGuess {
 void BvhRetargetOptions::Check() const {
   if (up_axis != 'a' && up_axis != 'y' && up_axis != 'z')
     throw UsageError(std::string("BvhRetargetOptions.up_axis = '") + up_axis + "': must be 'a' (auto), 'y' or 'z'");
+  RequireOption(min_hinge_turn_rad >= 0, "BvhRetargetOptions.min_hinge_turn_rad", min_hinge_turn_rad, ">= 0");
 }
 
 std::map<std::string, std::string> GuessBvhJointMap(const Skeleton& bvh, const std::vector<std::string>& target_names,
@@ -388,8 +412,10 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
   // Per frame: world rotations of the target joints, then local rotations and the root.
   const int pelvis_bvh = map_index[0];
   std::vector<Vector3d> pelvis_at(motion.frames.size());
-  result.poses.reserve(motion.frames.size());
   std::vector<Matrix3d> world(nt);
+  auto retarget_frames = [&]() {
+  result.poses.clear();
+  result.poses.reserve(motion.frames.size());
   for (std::size_t f = 0; f < motion.frames.size(); ++f) {
     const std::vector<Eigen::Isometry3d> bvh_world = WorldFromJoint(bvh, motion.frames[f]);
     Pose pose = Pose::Rest(nt);
@@ -416,6 +442,32 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
     pelvis_at[f] = result.translation_scale * (m * bvh_world[pelvis_bvh].translation());
     result.poses.push_back(std::move(pose));
   }
+  };
+  retarget_frames();
+
+  // Elbow hinges. The arms are aligned at rest by the shortest turn of each bone, which leaves
+  // the BVH arm's twist as its rest pose had it: its elbow then bends about another axis than the
+  // target's (Bandai Namco's punch: 25-38 degrees off, a forearm swung sideways out of the
+  // target's flexion plane). Each arm is turned about its own bones so that the elbow's mean
+  // flexion axis over the motion lands on the target's hinge, and the motion retargeted again.
+  const Vector3d lateral = target_rest[target.IndexOf("left_hip")] - target_rest[target.IndexOf("right_hip")];
+  bool turned = false;
+  for (const char* side : {"left", "right"}) {
+    const int shoulder = target.IndexOf(std::string(side) + "_shoulder");
+    const int elbow = target.IndexOf(std::string(side) + "_elbow");
+    const int wrist = target.IndexOf(std::string(side) + "_wrist");
+    const Vector3d upper = (target_rest[elbow] - target_rest[shoulder]).normalized();
+    const double turn = ElbowHingeTurn(result.poses, elbow, upper, lateral);
+    if (std::abs(turn) < options.min_hinge_turn_rad) continue;
+    result.elbow_turns_deg[side] = turn * 180.0 / M_PI;
+    align[shoulder] = align[shoulder] * Eigen::AngleAxisd(turn, upper).toRotationMatrix();
+    const Vector3d fore = (target_rest[wrist] - target_rest[elbow]).normalized();
+    const Matrix3d fore_turn = Eigen::AngleAxisd(turn, fore).toRotationMatrix();
+    align[elbow] = align[elbow] * fore_turn;
+    align[wrist] = align[wrist] * fore_turn;
+    turned = true;
+  }
+  if (turned) retarget_frames();
 
   // A pelvis faster than any performer (10 m/s) is a jump in the recording, often a reference
   // pose in the first frames.

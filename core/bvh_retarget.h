@@ -16,6 +16,7 @@
 // first standing frame when the rest pose is not a standing body (all bones along one axis).
 
 #include <Eigen/Core>
+#include <cmath>
 #include <map>
 #include <string>
 #include <vector>
@@ -39,7 +40,11 @@ struct BvhRetargetOptions {
   // Shift the motion vertically (one constant for the whole sequence) so that the lowest
   // ankle/toe joint over all frames is as high as the lowest one of the target at rest.
   bool feet_on_floor = true;
-  // Throws UsageError for a bad up_axis.
+  // An arm whose elbow bends about an axis this far (radians) or further from the target's hinge
+  // is turned about its bones to bend about the hinge (BvhRetargetResult::elbow_turns_deg);
+  // infinity keeps every arm as the rest poses align it.
+  double min_hinge_turn_rad = 5.0 * M_PI / 180.0;
+  // Throws UsageError for a bad up_axis or min_hinge_turn_rad.
   void Check() const;
 };
 
@@ -61,6 +66,9 @@ struct BvhRetargetResult {
   // world_from_bvh: turns BVH directions (after the scale) into the target world: up axis to
   // +z and the heading change of face_target.
   Eigen::Matrix3d world_from_bvh = Eigen::Matrix3d::Identity();
+  // Per arm ("left", "right"), the turn about its bones that put the BVH's elbow hinge on the
+  // target's, degrees (arms left as aligned at rest are absent).
+  std::map<std::string, double> elbow_turns_deg;
   std::vector<std::string> warnings;
 };
 

@@ -186,6 +186,14 @@ TemplateMotion BvhMotionOfTemplate(const BvhMotionSourceOptions& source_options,
   std::string unmapped;
   for (const std::string& name : retarget.unmapped) unmapped += (unmapped.empty() ? "" : ", ") + name;
   if (!unmapped.empty()) log->info.push_back("joints without a BVH joint (they follow their parent): " + unmapped);
+  std::string turns;
+  for (const auto& [side, degrees] : retarget.elbow_turns_deg) {
+    std::snprintf(line, sizeof line, "%s%s %+.0f", turns.empty() ? "" : ", ", side.c_str(), degrees);
+    turns += line;
+  }
+  if (!turns.empty())
+    log->info.push_back("arms turned about themselves so that the elbows bend about the template's hinge (degrees): " +
+                        turns);
   for (const std::string& warning : retarget.warnings) log->warnings.push_back(bvh_path + ": " + warning);
   motion.num_frames = static_cast<int>(poses->size());
   motion.fps = options.fps;

@@ -5,6 +5,8 @@
 
 #include <Eigen/Geometry>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <sstream>
 
 #include "core/bvh_io.h"
@@ -65,6 +67,29 @@ const std::vector<std::pair<std::string, std::string>> kSingleChildBones = {
     {"left_hip", "left_knee"},   {"left_knee", "left_ankle"}, {"left_ankle", "left_toe"},
     {"right_hip", "right_knee"}, {"right_knee", "right_ankle"}, {"right_ankle", "right_toe"}};
 
+// Every bone of kSingleChildBones points where its mapped BVH bone points, in every frame (cosine
+// of the angle between them above 1 - tolerance); `check` (may be empty) sees each bone's joints'
+// world transforms too: check(frame, from, target joint a, BVH joint ba, target transforms, BVH transforms).
+using BoneCheck = std::function<void(std::size_t, const std::string&, int, int, const std::vector<Eigen::Isometry3d>&,
+                                     const std::vector<Eigen::Isometry3d>&)>;
+void ExpectBonesPointAsInTheBvh(const BvhMotion& motion, const Skeleton& target, const BvhRetargetResult& result,
+                                double tolerance, const BoneCheck& check = {}) {
+  const Matrix3d m = result.world_from_bvh;
+  for (std::size_t f = 0; f < motion.frames.size(); ++f) {
+    const std::vector<Eigen::Isometry3d> bvh = WorldFromJoint(motion.skeleton, motion.frames[f]);
+    const std::vector<Eigen::Isometry3d> tgt = WorldFromJoint(target, result.poses[f]);
+    for (const auto& [from, to] : kSingleChildBones) {
+      const int a = target.IndexOf(from), b = target.IndexOf(to);
+      const int ba = motion.skeleton.IndexOf(result.joint_map.at(from));
+      const int bb = motion.skeleton.IndexOf(result.joint_map.at(to));
+      const Vector3d want = (m * (bvh[bb].translation() - bvh[ba].translation())).normalized();
+      const Vector3d got = (tgt[b].translation() - tgt[a].translation()).normalized();
+      EXPECT_GT(want.dot(got), 1 - tolerance) << "frame " << f << " bone " << from << " -> " << to;
+      if (check) check(f, from, a, ba, tgt, bvh);
+    }
+  }
+}
+
 TEST(BvhRetarget, MapsCmuNamesAndDetectsAxesAndUnits) {
   testing::TempDir dir;
   std::ofstream(dir / "m.bvh") << SyntheticBvh(TestFrames());
@@ -101,22 +126,15 @@ TEST(BvhRetarget, BonesPointWhereTheBvhBonesPointWithTheirTwist) {
   const Matrix3d m = result.world_from_bvh;
   const std::vector<Eigen::Isometry3d> target_rest = WorldFromJoint(target, result.poses[0]);
   const std::vector<Eigen::Isometry3d> bvh_rest = WorldFromJoint(motion.skeleton, motion.frames[0]);
-  for (std::size_t f = 0; f < motion.frames.size(); ++f) {
-    const std::vector<Eigen::Isometry3d> bvh = WorldFromJoint(motion.skeleton, motion.frames[f]);
-    const std::vector<Eigen::Isometry3d> tgt = WorldFromJoint(target, result.poses[f]);
-    for (const auto& [from, to] : kSingleChildBones) {
-      const int a = target.IndexOf(from), b = target.IndexOf(to);
-      const int ba = motion.skeleton.IndexOf(result.joint_map.at(from));
-      const int bb = motion.skeleton.IndexOf(result.joint_map.at(to));
-      const Vector3d want = (m * (bvh[bb].translation() - bvh[ba].translation())).normalized();
-      const Vector3d got = (tgt[b].translation() - tgt[a].translation()).normalized();
-      EXPECT_GT(want.dot(got), 1 - 1e-10) << "frame " << f << " bone " << from << " -> " << to;
-      // Twist too: the bone's change of orientation since frame 0 equals the BVH joint's.
-      const Matrix3d bvh_change = m * bvh[ba].linear() * bvh_rest[ba].linear().transpose() * m.transpose();
-      const Matrix3d target_change = tgt[a].linear() * target_rest[a].linear().transpose();
-      EXPECT_LT((bvh_change - target_change).norm(), 1e-9) << "frame " << f << " joint " << from;
-    }
-  }
+  // Twist too: the bone's change of orientation since frame 0 equals the BVH joint's.
+  ExpectBonesPointAsInTheBvh(motion, target, result, 1e-10,
+                             [&](std::size_t f, const std::string& from, int a, int ba,
+                                 const std::vector<Eigen::Isometry3d>& tgt, const std::vector<Eigen::Isometry3d>& bvh) {
+                               const Matrix3d bvh_change =
+                                   m * bvh[ba].linear() * bvh_rest[ba].linear().transpose() * m.transpose();
+                               const Matrix3d target_change = tgt[a].linear() * target_rest[a].linear().transpose();
+                               EXPECT_LT((bvh_change - target_change).norm(), 1e-9) << "frame " << f << " joint " << from;
+                             });
   // Frame 2 twists the left forearm by 40 degrees about its own axis: the target elbow turns by
   // 40 degrees about its bone relative to the upper arm.
   const std::vector<Eigen::Isometry3d> t1 = WorldFromJoint(target, result.poses[2]);
@@ -336,6 +354,55 @@ TEST(BvhRetarget, PelvisJumpBetweenFramesIsReported) {
   const BvhRetargetResult result = RetargetBvhFile(dir / "m.bvh", StudioLikeSkeleton());
   ASSERT_FALSE(result.warnings.empty());
   EXPECT_NE(result.warnings.back().find("between frames 0 and 1"), std::string::npos) << result.warnings.back();
+}
+
+// A performer whose elbow bends about an axis tilted 35 degrees about the upper arm from the one
+// the rest poses align with the target's hinge (the BVH's arm twisted at rest against the
+// target's): the arm is turned about its bones so that the target's elbow bends about its hinge
+// (the body's left-right axis made perpendicular to the upper arm), while every bone still points
+// where the BVH's does. Without the turn the elbow bends 35 degrees off the hinge.
+TEST(BvhRetarget, ElbowBendsAboutTheTargetsHinge) {
+  constexpr double kTiltRad = 35.0 * M_PI / 180.0;
+  // The BVH's left arm lies along +x, its front is +z: flexion turns about -y, tilted about x.
+  const Vector3d axis = Eigen::AngleAxisd(kTiltRad, Vector3d::UnitX()) * Vector3d(0, -1, 0);
+  std::vector<std::string> frames;
+  for (int f = 0; f < 16; ++f) {
+    const double bend = (30.0 + 6.0 * f) * M_PI / 180.0;
+    const Vector3d zyx = Eigen::AngleAxisd(bend, axis).toRotationMatrix().eulerAngles(2, 1, 0) * 180.0 / M_PI;
+    const Vector3d shoulder_zyx(-10.0 - 2.0 * f, 5.0, 0.0);  // the upper arm swings down and forwards
+    frames.push_back(Frame({0, 0, 0}, {{kLArm, shoulder_zyx}, {kLForeArm, zyx}}));
+  }
+  testing::TempDir dir;
+  std::ofstream(dir / "m.bvh") << SyntheticBvh(frames);
+  const BvhMotion motion = ReadBvh(dir / "m.bvh");
+  const Skeleton target = StudioLikeSkeleton();
+  const std::vector<Vector3d> rest = target.RestPositions();
+  const int shoulder = target.IndexOf("left_shoulder"), elbow = target.IndexOf("left_elbow");
+  const Vector3d upper = (rest[elbow] - rest[shoulder]).normalized();
+  const Vector3d lateral = rest[target.IndexOf("left_hip")] - rest[target.IndexOf("right_hip")];
+  const Vector3d hinge = (lateral - lateral.dot(upper) * upper).normalized();
+  // The largest angle between the target's elbow axis and its hinge over the bent frames.
+  auto worst_off_hinge = [&](const BvhRetargetResult& result) {
+    double worst = 0.0;
+    for (const Pose& pose : result.poses) {
+      const Eigen::AngleAxisd bend(pose.local_rotations[elbow]);
+      EXPECT_GT(bend.angle(), 25.0 * M_PI / 180.0);
+      worst = std::max(worst, std::acos(std::min(1.0, std::abs(bend.axis().dot(hinge)))));
+    }
+    return worst * 180.0 / M_PI;
+  };
+  BvhRetargetOptions keep;
+  keep.min_hinge_turn_rad = std::numeric_limits<double>::infinity();
+  const BvhRetargetResult kept = RetargetBvh(motion, target, keep, dir / "m.bvh");
+  EXPECT_GT(worst_off_hinge(kept), 25.0);
+  EXPECT_TRUE(kept.elbow_turns_deg.empty());
+
+  const BvhRetargetResult result = RetargetBvh(motion, target, {}, dir / "m.bvh");
+  EXPECT_LT(worst_off_hinge(result), 3.0);
+  ASSERT_EQ(result.elbow_turns_deg.count("left"), 1u);
+  EXPECT_NEAR(std::abs(result.elbow_turns_deg.at("left")), 35.0, 5.0);
+  EXPECT_EQ(result.elbow_turns_deg.count("right"), 0u);  // a straight arm is left as it was
+  ExpectBonesPointAsInTheBvh(motion, target, result, 1e-9);
 }
 
 TEST(BvhRetarget, RealCmuFile) {

@@ -26,6 +26,9 @@ TEST(CoreOptions, CheckNamesTheFieldAndTheValue) {
   BvhRetargetOptions retarget;
   retarget.up_axis = 'x';
   testing::ExpectCheckRefuses(retarget, "BvhRetargetOptions.up_axis = 'x': must be");
+  retarget = BvhRetargetOptions();
+  retarget.min_hinge_turn_rad = -0.1;
+  testing::ExpectCheckRefuses(retarget, "BvhRetargetOptions.min_hinge_turn_rad = -0.1");
 }
 
 TEST(CoreOptions, VectorsAndPairsOfFieldsAreNamedWithTheirValues) {
