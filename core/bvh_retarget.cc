@@ -73,15 +73,18 @@ std::vector<std::string> EssentialJoints() {
 // 20 degrees in fewer than 10 frames, or its axis wanders (the mean of the unit axes shorter than
 // 0.8: not a hinge).
 double ElbowHingeTurn(const std::vector<Pose>& poses, int elbow, const Vector3d& upper, const Vector3d& lateral) {
+  constexpr double kMinBendRad = 20.0 * M_PI / 180.0;
+  constexpr int kMinBentFrames = 10;
+  constexpr double kMinMeanAxisLength = 0.8;
   Vector3d sum = Vector3d::Zero();
   int bent = 0;
   for (const Pose& pose : poses) {
     const Eigen::AngleAxisd bend(pose.local_rotations[elbow]);
-    if (bend.angle() < 20.0 * M_PI / 180.0) continue;
+    if (bend.angle() < kMinBendRad) continue;
     sum += bend.axis();
     ++bent;
   }
-  if (bent < 10 || sum.norm() < 0.8 * bent) return 0.0;
+  if (bent < kMinBentFrames || sum.norm() < kMinMeanAxisLength * bent) return 0.0;
   const Vector3d axis = (sum - sum.dot(upper) * upper).normalized();
   Vector3d hinge = lateral - lateral.dot(upper) * upper;
   if (!(axis.allFinite() && hinge.norm() > 1e-9)) return 0.0;
@@ -413,35 +416,36 @@ BvhRetargetResult RetargetBvh(const BvhMotion& motion, const Skeleton& target, c
   const int pelvis_bvh = map_index[0];
   std::vector<Vector3d> pelvis_at(motion.frames.size());
   std::vector<Matrix3d> world(nt);
+  // Run again after the elbow hinges below turn an arm's alignment.
   auto retarget_frames = [&]() {
-  result.poses.clear();
-  result.poses.reserve(motion.frames.size());
-  for (std::size_t f = 0; f < motion.frames.size(); ++f) {
-    const std::vector<Eigen::Isometry3d> bvh_world = WorldFromJoint(bvh, motion.frames[f]);
-    Pose pose = Pose::Rest(nt);
-    for (int j = 0; j < nt; ++j) {
-      const int b = map_index[j];
-      const int parent = target.joints[j].parent;
-      if (b < 0) {
-        world[j] = parent >= 0 ? world[parent] : Matrix3d::Identity();
-      } else {
-        const Matrix3d g = m * bvh_world[b].linear() * m.transpose();
-        std::vector<Vector3d> predicted, actual;
-        for (std::size_t k = 0; k < used_children[j].size(); ++k) {
-          const int c = used_children[j][k];
-          const Vector3d a = m * (bvh_world[c].translation() - bvh_world[b].translation());
-          if (a.norm() < tiny) continue;
-          predicted.push_back((g * local_child[j][k]).normalized());
-          actual.push_back(a.normalized());
+    result.poses.clear();
+    result.poses.reserve(motion.frames.size());
+    for (std::size_t f = 0; f < motion.frames.size(); ++f) {
+      const std::vector<Eigen::Isometry3d> bvh_world = WorldFromJoint(bvh, motion.frames[f]);
+      Pose pose = Pose::Rest(nt);
+      for (int j = 0; j < nt; ++j) {
+        const int b = map_index[j];
+        const int parent = target.joints[j].parent;
+        if (b < 0) {
+          world[j] = parent >= 0 ? world[parent] : Matrix3d::Identity();
+        } else {
+          const Matrix3d g = m * bvh_world[b].linear() * m.transpose();
+          std::vector<Vector3d> predicted, actual;
+          for (std::size_t k = 0; k < used_children[j].size(); ++k) {
+            const int c = used_children[j][k];
+            const Vector3d a = m * (bvh_world[c].translation() - bvh_world[b].translation());
+            if (a.norm() < tiny) continue;
+            predicted.push_back((g * local_child[j][k]).normalized());
+            actual.push_back(a.normalized());
+          }
+          world[j] = BestRotation(predicted, actual) * g * align[j];
         }
-        world[j] = BestRotation(predicted, actual) * g * align[j];
+        const Matrix3d local = parent >= 0 ? Matrix3d(world[parent].transpose() * world[j]) : world[j];
+        pose.local_rotations[j] = Quaterniond(local).normalized();
       }
-      const Matrix3d local = parent >= 0 ? Matrix3d(world[parent].transpose() * world[j]) : world[j];
-      pose.local_rotations[j] = Quaterniond(local).normalized();
+      pelvis_at[f] = result.translation_scale * (m * bvh_world[pelvis_bvh].translation());
+      result.poses.push_back(std::move(pose));
     }
-    pelvis_at[f] = result.translation_scale * (m * bvh_world[pelvis_bvh].translation());
-    result.poses.push_back(std::move(pose));
-  }
   };
   retarget_frames();
 

@@ -90,7 +90,8 @@ struct TrackerOptions {
   // `limb_min_gain` (BlazePose misplaced the Indian dance's wrists, folded before the chest, by
   // 7-10 cm: the fit that found the true wrist came only 2.8 cm closer to theirs, for +0.013 of
   // IoU). A refit that ends where it started is not kept: on the suite, keeping those (a few mm
-  // closer) let the heavy body's arms drift (joint error max 3.3 -> 12.2 cm). A leg whose ankle a fitted skirt hides is left to the silhouettes.
+  // closer) let the heavy body's arms drift (joint error max 3.3 -> 12.2 cm). A leg whose ankle a
+  // fitted skirt hides is left to the silhouettes.
   double landmark_disagreement_m = 0.08;
   double landmark_min_approach_m = 0.04;
   double landmark_iou_tolerance = 0.015;

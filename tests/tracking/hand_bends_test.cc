@@ -72,6 +72,18 @@ struct FoldedHandScene {
   TemplatePose truth = ArmsSpreadLeftFolded(body, 105, 60);
   std::vector<Image> masks = testing::TemplateMasks(body, shape, truth, rig);
   Eigen::Vector3d true_wrist = body.JointPositions(shape, truth)[kJointLeftWrist];
+
+  // The left wrist's distance from the truth after `options`' tracker, resumed from `held` with
+  // `iou_history`, tracks `frame` (with `landmarks` when given); the frame's flags go to `flags`.
+  double TrackedWristError(const TrackerOptions& options, const TemplatePose& held, double iou_history, int frame,
+                           const std::shared_ptr<const LandmarkJoints>& landmarks, std::string* flags) const {
+    Tracker tracker(rig, {}, options);
+    if (landmarks) tracker.UseLandmarks([&](int) { return landmarks; });
+    tracker.Resume(shape, {held, held}, std::vector<double>(10, iou_history), {});
+    const TrackedFrame result = tracker.Track(frame, masks);
+    for (const std::string& flag : result.flags) *flags += flag + " ";
+    return (result.joints[kJointLeftWrist] - true_wrist).norm();
+  }
 };
 
 // The truth: the left forearm folded 105 degrees, the hand bent 60 degrees further in. The
@@ -86,15 +98,12 @@ TEST(HandBends, AForearmTurnedOntoMisplacedLandmarksFindsTheTrueWristWithItsHand
   LandmarkJoints landmarks = testing::TemplateLandmarks(body, shape, scene.truth);
   // Misplaced towards the elbow and up, 8 cm.
   landmarks.position[kJointLeftWrist] += 0.08 * Eigen::Vector3d(-0.6, -0.6, 0.5).normalized();
+  const auto shared_landmarks = std::make_shared<const LandmarkJoints>(landmarks);
   auto track = [&](const TemplatePose& held, const std::vector<double>& flex_deg, std::string* flags) {
     TrackerOptions options;
     options.hand_rebend_flex_deg = flex_deg;
-    Tracker tracker(scene.rig, {}, options);
-    tracker.UseLandmarks([&](int) { return std::make_shared<const LandmarkJoints>(landmarks); });
-    tracker.Resume(shape, {held, held}, std::vector<double>(10, 0.0), {});  // nothing to drop from
-    const TrackedFrame result = tracker.Track(10, scene.masks);            // a landmark check
-    for (const std::string& flag : result.flags) *flags += flag + " ";
-    return (result.joints[kJointLeftWrist] - scene.true_wrist).norm();
+    // No overlap to drop from (IoU history 0); frame 10 is a landmark check.
+    return scene.TrackedWristError(options, held, 0.0, 10, shared_landmarks, flags);
   };
   for (const TemplatePose& held : {ArmsSpreadLeftFolded(body, 0, -60), ArmsSpreadLeftFolded(body, 150, -60)}) {
     std::string with_flags, without_flags;
@@ -122,11 +131,7 @@ TEST(HandBends, TheLostLimbSearchFindsTheFoldedForearmWithItsHand) {
     // The template's own silhouettes: the wrong forearm still overlaps 0.983-0.985, so the frames
     // before were explained fully and a smaller drop sets the search off.
     options.limb_search_drop = 0.005;
-    Tracker tracker(scene.rig, {}, options);
-    tracker.Resume(scene.shape, {held, held}, std::vector<double>(10, 1.0), {});
-    const TrackedFrame result = tracker.Track(11, scene.masks);
-    for (const std::string& flag : result.flags) *flags += flag + " ";
-    return (result.joints[kJointLeftWrist] - scene.true_wrist).norm();
+    return scene.TrackedWristError(options, held, 1.0, 11, nullptr, flags);
   };
   for (const TemplatePose& held : {ArmsSpreadLeftFolded(body, 0, -60), ArmsSpreadLeftFolded(body, 150, -60)}) {
     std::string with_flags, without_flags;
