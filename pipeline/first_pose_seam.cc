@@ -40,8 +40,23 @@ int FirstPoseSeamFrames(double fps) { return std::max(2, static_cast<int>(std::l
 
 double FirstPoseSeamWeight(const FirstPoseSeam& seam, int frame) {
   if (frame <= 0) return 1.0;
-  if (frame >= seam.frames) return 0.0;
+  if (frame >= seam.frames || frame >= seam.tracked_from) return 0.0;
   return 0.5 * (1.0 + std::cos(M_PI * frame / seam.frames));
+}
+
+int FirstPoseSeamEnd(const BodyTemplate& body, const FirstPoseSeam& seam,
+                     const std::function<const TemplatePose*(int)>& tracked,
+                     const std::function<std::optional<double>(int, const TemplatePose&)>& overlap) {
+  for (int frame = 1; frame < seam.frames; ++frame) {
+    const TemplatePose* pose = tracked(frame);
+    if (!pose) break;
+    const std::optional<double> as_tracked = overlap(frame, *pose);
+    const std::optional<double> corrected = as_tracked ? overlap(frame, FirstPoseSeamPose(body, seam, *pose, frame))
+                                                       : std::nullopt;
+    if (!corrected) break;
+    if (*as_tracked > *corrected) return frame;
+  }
+  return seam.frames;
 }
 
 TemplatePose FirstPoseSeamPose(const BodyTemplate& body, const FirstPoseSeam& seam, const TemplatePose& tracked,

@@ -57,6 +57,10 @@ struct StageReport {
 // The mask file of camera `camera` at `frame` used by the run (given masks or the run's own).
 std::string RunMaskPath(const RunInputs& inputs, int camera, int frame);
 
+// The masks of one frame for the tracker: held-out cameras left empty. Throws InputError naming
+// a missing mask file or one whose size differs from its camera's calibration.
+std::vector<Image> TrackingMasks(const RunInputs& inputs, int frame);
+
 // Silhouettes of every camera (held-out ones too, for evaluation) into RUN/masks; skipped when
 // masks are given.
 StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& progress, TimingLog* timings);

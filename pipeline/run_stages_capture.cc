@@ -26,6 +26,19 @@ std::string RunMaskPath(const RunInputs& inputs, int camera, int frame) {
   return inputs.folder.MaskPath(name, frame);
 }
 
+std::vector<Image> TrackingMasks(const RunInputs& inputs, int frame) {
+  const Rig& rig = inputs.capture->rig();
+  std::vector<Image> masks(rig.size());
+  for (int c = 0; c < rig.size(); ++c) {
+    if (inputs.cameras.is_held_out(c)) continue;
+    const std::string path = RunMaskPath(inputs, c, frame);
+    masks[c] = ReadMaskFile(path);
+    if (masks[c].width != rig.cameras[c].width || masks[c].height != rig.cameras[c].height)
+      throw InputError(path, "mask size differs from the calibration of camera " + rig.cameras[c].name);
+  }
+  return masks;
+}
+
 namespace {
 
 // The masks the tracker will read, checked against each other through the calibration on a
@@ -132,20 +145,6 @@ StageReport RunSilhouetteStage(const RunInputs& inputs, const ProgressCallback& 
 }
 
 namespace {
-
-// The masks of one frame for the tracker: held-out cameras left empty.
-std::vector<Image> TrackingMasks(const RunInputs& inputs, int frame) {
-  const Rig& rig = inputs.capture->rig();
-  std::vector<Image> masks(rig.size());
-  for (int c = 0; c < rig.size(); ++c) {
-    if (inputs.cameras.is_held_out(c)) continue;
-    const std::string path = RunMaskPath(inputs, c, frame);
-    masks[c] = ReadMaskFile(path);
-    if (masks[c].width != rig.cameras[c].width || masks[c].height != rig.cameras[c].height)
-      throw InputError(path, "mask size differs from the calibration of camera " + rig.cameras[c].name);
-  }
-  return masks;
-}
 
 bool TrackedFrameFinished(const RunFolder& folder, int frame) {
   return fs::exists(folder.TrackingStatePath(frame)) && fs::exists(folder.TemplatePath(frame));

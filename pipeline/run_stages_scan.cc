@@ -19,6 +19,7 @@
 #include "core/parallel.h"
 #include "deform/confluent_motion.h"
 #include "deform/correspondences.h"
+#include "silhouette/overlap.h"
 #include "tracking/motion_io.h"
 #include "tracking/scan_registration.h"
 
@@ -40,12 +41,21 @@ StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& 
   ScanCorrespondenceOptions options;
   options.known_shape = shape;
   options.given_path = inputs.correspondences_path;
+  std::vector<Image> first_masks;
   try {
     const PosesFile tracked = ReadPosesJson(inputs.folder.Path("poses.json"), body);
-    if (!tracked.frames.empty() && tracked.frames.front().frame == 0)
+    if (!tracked.frames.empty() && tracked.frames.front().frame == 0) {
       options.first_tracked_pose = tracked.frames.front().pose;
+      first_masks = TrackingMasks(inputs, 0);
+    }
   } catch (const InputError&) {
-    // No readable poses.json.
+    // No readable poses.json, or frame 0's masks are gone: the residuals alone decide.
+  }
+  if (!first_masks.empty()) {
+    options.first_frame_overlap = [&](const TemplatePose& pose) {
+      return MeanSilhouetteIoU(SilhouetteIoUs(body.PosedMesh(shape, pose), inputs.capture->rig(), first_masks, {},
+                                              inputs.tracker.iou_downscale));
+    };
   }
   // Without frame 0 (a first shard that starts later) the registration goes without the first
   // tracked pose: the seam it may record eases frames from 0 on.
@@ -82,6 +92,22 @@ std::optional<RunSeam> ReadRunSeam(const RunInputs& inputs, const BodyTemplate& 
   if (!registration.first_tracked_pose) return std::nullopt;
   RunSeam run{{registration.pose, *registration.first_tracked_pose, FirstPoseSeamFrames(inputs.fps)},
               ReadPosesJson(inputs.folder.Path("poses.json"), body)};
+  auto tracked = [&](int frame) -> const TemplatePose* {
+    for (const TrackedFrame& f : run.tracked.frames)
+      if (f.frame == frame) return &f.pose;
+    return nullptr;
+  };
+  auto overlap = [&](int frame, const TemplatePose& pose) -> std::optional<double> {
+    std::vector<Image> masks;
+    try {
+      masks = TrackingMasks(inputs, frame);
+    } catch (const InputError&) {
+      return std::nullopt;  // a shard's masks not there yet: the seam eases as planned
+    }
+    return MeanSilhouetteIoU(SilhouetteIoUs(body.PosedMesh(run.tracked.shape, pose), inputs.capture->rig(), masks, {},
+                                            inputs.tracker.iou_downscale));
+  };
+  run.seam.tracked_from = FirstPoseSeamEnd(body, run.seam, tracked, overlap);
   return run;
 }
 
@@ -105,6 +131,10 @@ StageReport RunDeformStage(const RunInputs& inputs, const BodyTemplate& body, co
   const Mesh reference = ReadMesh(reference_path);
   const Correspondences correspondences = ReadCorrespondences(correspondences_path);
   const std::optional<RunSeam> seam = ReadRunSeam(inputs, body, correspondences_path);
+  if (seam && seam->seam.tracked_from < seam->seam.frames)
+    report.notes.push_back("the first frames ease from the scan's pose into the tracked ones up to frame " +
+                           std::to_string(seam->seam.tracked_from) +
+                           ", where the tracked pose explains the silhouettes better than the eased one");
   const double factor_start = NowSeconds();
   ConfluentMotion motion(scan, reference, correspondences, {}, inputs.scan_path, correspondences_path);
   timings->Add("deform_factor", -1, NowSeconds() - factor_start);
@@ -147,7 +177,7 @@ StageReport RunDeformStage(const RunInputs& inputs, const BodyTemplate& body, co
     if (posed.vertices.rows() != reference.vertices.rows())
       throw InputError(path, "the template has " + std::to_string(posed.vertices.rows()) + " vertices, the reference " +
                                  std::to_string(reference.vertices.rows()));
-    if (seam && frame < seam->seam.frames) {
+    if (seam && FirstPoseSeamWeight(seam->seam, frame) > 0.0) {
       const auto tracked = std::find_if(seam->tracked.frames.begin(), seam->tracked.frames.end(),
                                         [&](const TrackedFrame& f) { return f.frame == frame; });
       if (tracked == seam->tracked.frames.end())

@@ -18,6 +18,9 @@ namespace {
 // body as a whole fits well is an error of the tracker, not the scan's pose).
 constexpr double kAsTrackedTolerance = 1.25;
 constexpr double kAsTrackedSegmentExcessM = 0.01;
+// The first frame's mean silhouette IoU that the fit may fall short of the tracked pose's and
+// still count as that frame's pose (ScanCorrespondenceOptions::first_frame_overlap).
+constexpr double kFirstFrameIouTolerance = 0.005;
 
 // The segment of `a` whose rms exceeds `b`'s the most, and by how much (metres).
 struct SegmentExcess {
@@ -91,6 +94,21 @@ ScanRegistration RegisterSeeded(const BodyTemplate& body, const Mesh& scan, cons
                                BodySegmentName(excess.segment) + " is " + Centimetres(excess.metres) +
                                " further off the scan than a fit's: the fit is the reference, and the first frames "
                                "ease from it into the tracked poses");
+  } else if (fitted && options.first_tracked_pose && options.first_frame_overlap) {
+    // The tracked template lies too far off the scan to call it the scan's pose by the residuals
+    // (a whole limb wrong), but the first frame's silhouettes may still say that the scan's pose,
+    // not the tracked one, is what the cameras saw.
+    const double fitted_iou = options.first_frame_overlap(fitted->pose);
+    const double tracked_iou = options.first_frame_overlap(*options.first_tracked_pose);
+    if (fitted_iou >= tracked_iou - kFirstFrameIouTolerance) {
+      char ious[64];
+      std::snprintf(ious, sizeof ious, "mean IoU %.4f, tracked %.4f", fitted_iou, tracked_iou);
+      const std::string line = "the fit to the scan explains the first frame's silhouettes as well as that frame's "
+                               "tracked pose (" + std::string(ious) + "): the scan stands in the first frame's pose, "
+                               "the fit is the reference, and the first frames ease from it into the tracked poses";
+      fitted->first_tracked_pose = options.first_tracked_pose;
+      fitted->warnings.push_back(line);
+    }
   }
   if (first_fits_better) {
     from_first_frame->warnings.push_back(

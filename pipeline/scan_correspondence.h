@@ -3,6 +3,7 @@
 // drive Confluent Motion: placed automatically (with optional manual pairs first) or read from
 // a given file. The one implementation behind `run`, `correspond` and `animate`.
 
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -23,6 +24,13 @@ struct ScanCorrespondenceOptions {
   // kept): the first tracked frame's pose, for a scan taken in the performer's first pose
   // (crouched, arms against the body) that a start from a standing body does not reach.
   std::optional<TemplatePose> first_tracked_pose;
+  // With first_tracked_pose: the mean IoU of the template (the known shape) in a pose with the
+  // first frame's masks in the tracking cameras. When the fit to the scan explains that frame's
+  // silhouettes at least about as well as the tracked pose does, the scan stands in the first
+  // frame's pose even where the tracked template lies far off it (a forearm folded the wrong way
+  // at frame 0): the first frames ease from the fit (pipeline/first_pose_seam.h). Empty: the
+  // residuals against the scan alone decide.
+  std::function<double(const TemplatePose&)> first_frame_overlap;
   std::string given_path;   // correspondences to read and validate instead of placing; "": place
   std::string manual_path;  // with placement: pairs kept first, the automatic ones complete them
   double joint_clearance_m = CorrespondencePlacementOptions().joint_clearance_m;

@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "calib/capture.h"
+#include "calib/rig_check.h"  // MaskIoU
 #include "core/cv_interop.h"
 
 namespace confluent {
@@ -81,6 +82,33 @@ Image DownscaleMask(const Image& mask, int downscale) {
   cv::resize(AsCvMat(mask), small, cv::Size(width, height), 0, 0, cv::INTER_AREA);
   cv::threshold(small, small, 127, 255, cv::THRESH_BINARY);
   return ImageFromCvMat(small);
+}
+
+std::vector<double> SilhouetteIoUs(const Mesh& mesh, const Rig& rig, const std::vector<Image>& masks,
+                                   const std::vector<bool>& use, int downscale) {
+  std::vector<double> ious(rig.size(), -1.0);
+  for (int c = 0; c < rig.size() && c < static_cast<int>(masks.size()); ++c) {
+    if ((!use.empty() && !use[c]) || masks[c].empty()) continue;
+    const Camera& camera = rig.cameras[c];
+    const int factor = downscale > 0 ? downscale : std::max(1, static_cast<int>(std::lround(masks[c].width / 256.0)));
+    const Image rendered = RasterizeClosedMesh(
+        mesh, ResizedCamera(camera, std::max(1, camera.width / factor), std::max(1, camera.height / factor)));
+    const Image mask = DownscaleMask(masks[c], factor);
+    if (mask.width != rendered.width || mask.height != rendered.height) continue;
+    ious[c] = MaskIoU(rendered, mask);
+  }
+  return ious;
+}
+
+double MeanSilhouetteIoU(const std::vector<double>& ious) {
+  double sum = 0.0;
+  int n = 0;
+  for (double iou : ious)
+    if (iou >= 0.0) {
+      sum += iou;
+      ++n;
+    }
+  return n ? sum / n : 0.0;
 }
 
 long CountForeground(const Image& mask) {

@@ -24,6 +24,15 @@ Image RasterizeClosedMesh(const Mesh& mesh, const Camera& camera);
 // `mask` reduced by `downscale` (area average, thresholded at 50%), 0/255.
 Image DownscaleMask(const Image& mask, int downscale);
 
+// Per camera of `rig`, the IoU of the closed `mesh`'s silhouette with masks[c] (camera size, 0/255),
+// both reduced by `downscale` (0: each camera to about 256 pixels across; the silhouette
+// centre-sampled like the masks); -1 where use[c] is false or the mask is missing or of another size.
+std::vector<double> SilhouetteIoUs(const Mesh& mesh, const Rig& rig, const std::vector<Image>& masks,
+                                   const std::vector<bool>& use, int downscale = 0);
+
+// The mean of the IoUs that SilhouetteIoUs computed (those >= 0); 0 when there are none.
+double MeanSilhouetteIoU(const std::vector<double>& ious);
+
 // Number of foreground (non-zero) pixels of a 1-channel 8-bit mask.
 long CountForeground(const Image& mask);
 

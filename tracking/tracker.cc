@@ -10,7 +10,6 @@
 #include <string_view>
 
 #include "calib/camera.h"
-#include "calib/rig_check.h"  // MaskIoU
 #include "core/statistics.h"
 #include "core/error.h"
 #include "core/parallel.h"
@@ -167,25 +166,8 @@ std::vector<bool> Tracker::UsableCameras(const std::vector<Image>& masks, std::v
 
 void Tracker::Evaluate(const BodyShape& shape, const std::vector<Image>& masks, const std::vector<bool>& use,
                        TrackedFrame* result) const {
-  const Mesh mesh = body_.PosedMesh(shape, result->pose);
-  result->camera_iou.assign(rig_.size(), -1.0);
-  double sum = 0;
-  int n = 0;
-  for (int c = 0; c < rig_.size(); ++c) {
-    if (!use[c]) continue;
-    const int factor = options_.iou_downscale > 0 ? options_.iou_downscale
-                                                  : std::max(1, static_cast<int>(std::lround(masks[c].width / 256.0)));
-    // Centre-sampled, like the masks (a conservative fill would add half a reduced pixel all round).
-    const Image rendered = RasterizeClosedMesh(
-        mesh, ResizedCamera(rig_.cameras[c], std::max(1, rig_.cameras[c].width / factor),
-                            std::max(1, rig_.cameras[c].height / factor)));
-    const Image mask = DownscaleMask(masks[c], factor);
-    if (mask.width != rendered.width || mask.height != rendered.height) continue;
-    result->camera_iou[c] = MaskIoU(rendered, mask);
-    sum += result->camera_iou[c];
-    ++n;
-  }
-  result->mean_iou = n ? sum / n : 0.0;
+  result->camera_iou = SilhouetteIoUs(body_.PosedMesh(shape, result->pose), rig_, masks, use, options_.iou_downscale);
+  result->mean_iou = MeanSilhouetteIoU(result->camera_iou);
   result->joints = body_.JointPositions(shape, result->pose);
 }
 

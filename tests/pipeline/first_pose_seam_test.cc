@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <optional>
 
 namespace confluent {
 namespace {
@@ -84,6 +86,39 @@ TEST(FirstPoseSeam, ApplyMovesTheTrackedTemplateToTheEasedPose) {
     const RowMatrixX3d expected = c.body.PosedMesh(c.shape, FirstPoseSeamPose(c.body, c.seam, c.later, frame)).vertices;
     EXPECT_LT((vertices - expected).cwiseAbs().maxCoeff(), 1e-12) << frame;
   }
+}
+
+// The silhouettes of frames 1..9 seen by a tracker that kept its frame-0 error until `found` (the
+// corrected pose is the truth before it, the tracked one from it on): the seam ends there.
+TEST(FirstPoseSeam, EndsWhereTheTrackedPoseExplainsTheSilhouettesBetter) {
+  SeamCase c;
+  auto tracked = [&](int) { return &c.later; };
+  for (int found : {1, 4, 10}) {
+    auto overlap = [&](int frame, const TemplatePose& pose) -> std::optional<double> {
+      const TemplatePose truth = frame < found ? FirstPoseSeamPose(c.body, c.seam, c.later, frame) : c.later;
+      return 1.0 - c.Distance(pose, truth);  // higher for the pose nearer the truth
+    };
+    c.seam.tracked_from = FirstPoseSeamEnd(c.body, c.seam, tracked, overlap);
+    EXPECT_EQ(c.seam.tracked_from, found);
+    EXPECT_DOUBLE_EQ(FirstPoseSeamWeight(c.seam, 0), 1.0);
+    for (int frame = 1; frame < c.seam.frames; ++frame)
+      EXPECT_EQ(FirstPoseSeamWeight(c.seam, frame) > 0.0, frame < found) << found << " " << frame;
+    c.seam.tracked_from = std::numeric_limits<int>::max();
+  }
+  // Where a frame is not tracked, or its silhouettes are unknown, the search stops: the seam eases
+  // as planned.
+  auto always_tracked_better = [&](int, const TemplatePose& pose) -> std::optional<double> {
+    return 1.0 - c.Distance(pose, c.later);
+  };
+  EXPECT_EQ(FirstPoseSeamEnd(c.body, c.seam, [&](int frame) { return frame < 3 ? nullptr : &c.later; },
+                             always_tracked_better),
+            c.seam.frames);
+  EXPECT_EQ(FirstPoseSeamEnd(c.body, c.seam, tracked,
+                             [&](int frame, const TemplatePose& pose) -> std::optional<double> {
+                               if (frame == 1) return std::nullopt;
+                               return always_tracked_better(frame, pose);
+                             }),
+            c.seam.frames);
 }
 
 TEST(FirstPoseSeam, LastsFourTenthsOfASecondAndAtLeastTwoFrames) {

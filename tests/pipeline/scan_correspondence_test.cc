@@ -11,7 +11,9 @@
 #include "core/error.h"
 #include "core/skinning.h"
 #include "deform/confluent_motion.h"
+#include "silhouette/overlap.h"
 #include "studio/actor.h"
+#include "tests/support/camera_ring.h"
 
 namespace confluent {
 namespace {
@@ -92,28 +94,56 @@ TEST(ScanCorrespondence, CrouchedScanIsRegisteredFromTheFirstTrackedPose) {
   EXPECT_GT(result.correspondences.pairs.size(), 50u);
 }
 
-// The actor scanned with the arms turned from the A-pose and a knee bent, the tracker's first frame in
-// the same pose (found by registering to the scan, as a tracker that did well would): that
-// frame's template is the reference, so Confluent Motion gives back the scan at frame 0. A
-// first frame in another pose (arms raised) is a pose to register from, not the reference.
-TEST(ScanCorrespondence, ScanInTheFirstTrackedPoseIsReproducedAtFrameZero) {
-  StudioActorOptions actor_options;
-  actor_options.target_triangles = 12000;
-  const StudioActor actor = BuildStudioActor(actor_options);
-  const BodyTemplate body;
-  auto about = [](double angle, const Eigen::Vector3d& axis) { return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis)); };
-  Pose held = Pose::Rest(actor.skeleton.size());
-  held.local_rotations[kJointLeftShoulder] = about(0.45, Eigen::Vector3d::UnitY());
-  held.local_rotations[kJointRightShoulder] = about(-0.45, Eigen::Vector3d::UnitY());
-  held.local_rotations[kJointLeftHip] = about(0.5, Eigen::Vector3d::UnitX());
-  held.local_rotations[kJointLeftKnee] = about(-0.8, Eigen::Vector3d::UnitX());
-  Mesh scan = actor.mesh;
-  scan.vertices = SkinVertices(actor.mesh.vertices, actor.weights, actor.skeleton, held, SkinningMethod::kDualQuaternion);
-  const BodyShape shape = BodyShape::Uniform(1.75);
+// The actor scanned with the arms turned from the A-pose and a knee bent, and the template
+// registered to it: the first tracked frame of a tracker that did well.
+struct HeldPoseScan {
+  BodyTemplate body;
+  BodyShape shape = BodyShape::Uniform(1.75);
+  Mesh scan;
+  TemplatePose tracked;
   ScanRegistrationOptions fit;
-  fit.fit_shape = false;
-  fit.initial_shape = shape;
-  const TemplatePose tracked = RegisterTemplateToScan(body, scan, fit, "held.ply").pose;
+  HeldPoseScan() {
+    StudioActorOptions actor_options;
+    actor_options.target_triangles = 12000;
+    const StudioActor actor = BuildStudioActor(actor_options);
+    auto about = [](double angle, const Eigen::Vector3d& axis) {
+      return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis));
+    };
+    Pose held = Pose::Rest(actor.skeleton.size());
+    held.local_rotations[kJointLeftShoulder] = about(0.45, Eigen::Vector3d::UnitY());
+    held.local_rotations[kJointRightShoulder] = about(-0.45, Eigen::Vector3d::UnitY());
+    held.local_rotations[kJointLeftHip] = about(0.5, Eigen::Vector3d::UnitX());
+    held.local_rotations[kJointLeftKnee] = about(-0.8, Eigen::Vector3d::UnitX());
+    scan = actor.mesh;
+    scan.vertices =
+        SkinVertices(actor.mesh.vertices, actor.weights, actor.skeleton, held, SkinningMethod::kDualQuaternion);
+    fit.fit_shape = false;
+    fit.initial_shape = shape;
+    tracked = RegisterTemplateToScan(body, scan, fit, "held.ply").pose;
+  }
+  // The template's rms residual against the scan in `pose` as it is, and registered from it.
+  double RmsAsIs(const TemplatePose& pose) const {
+    ScanRegistrationOptions as_is = fit;
+    as_is.initial_pose = pose;
+    as_is.rounds = 0;
+    return RegisterTemplateToScan(body, scan, as_is, "held.ply").rms_residual_m;
+  }
+  double RmsFittedFrom(const TemplatePose& pose) const {
+    ScanRegistrationOptions from = fit;
+    from.initial_pose = pose;
+    return RegisterTemplateToScan(body, scan, from, "held.ply").rms_residual_m;
+  }
+};
+
+// The tracker's first frame in the scan's pose: that frame's template is the reference, so
+// Confluent Motion gives back the scan at frame 0. A first frame in another pose (arms raised) is a
+// pose to register from, not the reference.
+TEST(ScanCorrespondence, ScanInTheFirstTrackedPoseIsReproducedAtFrameZero) {
+  const HeldPoseScan held;
+  const BodyTemplate& body = held.body;
+  const BodyShape& shape = held.shape;
+  const Mesh& scan = held.scan;
+  const TemplatePose& tracked = held.tracked;
 
   ScanCorrespondenceOptions options;
   options.known_shape = shape;
@@ -134,14 +164,7 @@ TEST(ScanCorrespondence, ScanInTheFirstTrackedPoseIsReproducedAtFrameZero) {
   // erred there, so the fit to the scan is the reference.
   TemplatePose bent = tracked;
   bent.dofs[kJointRightElbow][0] += 0.15;
-  ScanRegistrationOptions as_is = fit;
-  as_is.initial_pose = bent;
-  as_is.rounds = 0;
-  ScanRegistrationOptions from_bent = fit;
-  from_bent.initial_pose = bent;
-  const double bent_rms = RegisterTemplateToScan(body, scan, as_is, "held.ply").rms_residual_m;
-  const double fitted_rms = RegisterTemplateToScan(body, scan, from_bent, "held.ply").rms_residual_m;
-  ASSERT_LT(bent_rms, 1.25 * fitted_rms);  // the whole-body test alone would take it
+  ASSERT_LT(held.RmsAsIs(bent), 1.25 * held.RmsFittedFrom(bent));  // the whole-body test alone would take it
   options.first_tracked_pose = bent;
   const ScanCorrespondence not_bent = CorrespondTemplateToScan(body, scan, "held.ply", options);
   for (const std::string& warning : not_bent.registration.warnings)
@@ -167,6 +190,56 @@ TEST(ScanCorrespondence, ScanInTheFirstTrackedPoseIsReproducedAtFrameZero) {
     EXPECT_EQ(warning.find("that frame's template is the reference"), std::string::npos) << warning;
   EXPECT_FALSE(other.registration.first_tracked_pose);
   EXPECT_LT(other.registration.rms_residual_m, 0.015);
+}
+
+// The tracker's first frame with the right forearm folded far from the scan's: the body as a whole
+// fits the scan too poorly to call it the scan's pose by the residuals, but the first frame's
+// silhouettes (here the scan's own, in a ring of cameras) are explained better by the fit: the
+// scan stands in that frame's pose, and the first frames ease from the fit. Where the performer
+// raised the arms at frame 0 instead, the silhouettes say so.
+TEST(ScanCorrespondence, FirstFrameSilhouettesTellATrackersFoldedForearmFromAnotherPose) {
+  const HeldPoseScan held;
+  const Rig rig = testing::CameraRing(8, 320, 240);
+  std::vector<Image> first_masks;
+  for (const Camera& camera : rig.cameras) first_masks.push_back(RasterizeClosedMesh(held.scan, camera));
+  ScanCorrespondenceOptions options;
+  options.known_shape = held.shape;
+  const auto overlap = [&](const TemplatePose& pose) {
+    return MeanSilhouetteIoU(SilhouetteIoUs(held.body.PosedMesh(held.shape, pose), rig, first_masks, {}));
+  };
+
+  TemplatePose folded = held.tracked;
+  folded.dofs[kJointRightElbow][0] += 1.2;
+  ASSERT_GT(held.RmsAsIs(folded), 1.25 * held.RmsFittedFrom(folded));  // the residuals alone refuse it
+  options.first_tracked_pose = folded;
+  EXPECT_FALSE(CorrespondTemplateToScan(held.body, held.scan, "held.ply", options).registration.first_tracked_pose);
+
+  options.first_frame_overlap = overlap;
+  const ScanCorrespondence result = CorrespondTemplateToScan(held.body, held.scan, "held.ply", options);
+  ASSERT_TRUE(result.registration.first_tracked_pose);
+  EXPECT_GT(overlap(result.registration.pose), overlap(folded));
+  bool said = false;
+  for (const std::string& warning : result.registration.warnings)
+    said = said || warning.find("explains the first frame's silhouettes") != std::string::npos;
+  EXPECT_TRUE(said);
+  FirstPoseSeam seam{result.registration.pose, *result.registration.first_tracked_pose, 10};
+  RowMatrixX3d eased = held.body.PosedMesh(held.shape, folded).vertices;
+  ApplyFirstPoseSeam(held.body, held.shape, seam, folded, 0, &eased);
+  ConfluentMotion motion(held.scan, result.reference, result.correspondences);
+  EXPECT_LT((motion.Deform(eased) - held.scan.vertices).rowwise().norm().maxCoeff(), 1e-3);  // frame 0 is the scan
+  const RowMatrixX3d as_tracked = held.body.PosedMesh(held.shape, folded).vertices;
+  EXPECT_GT((motion.Deform(as_tracked) - held.scan.vertices).rowwise().norm().maxCoeff(), 0.05);
+
+  TemplatePose raised = held.tracked;
+  raised.dofs[kJointLeftShoulder][1] += 1.0;
+  raised.dofs[kJointRightShoulder][1] -= 1.0;
+  options.first_tracked_pose = raised;
+  EXPECT_TRUE(CorrespondTemplateToScan(held.body, held.scan, "held.ply", options).registration.first_tracked_pose)
+      << "silhouettes of the scan's pose: raised arms are the tracker's error";
+  const Mesh raised_body = held.body.PosedMesh(held.shape, raised);
+  for (int c = 0; c < rig.size(); ++c) first_masks[c] = RasterizeClosedMesh(raised_body, rig.cameras[c]);
+  EXPECT_FALSE(CorrespondTemplateToScan(held.body, held.scan, "held.ply", options).registration.first_tracked_pose)
+      << "the performer raised the arms";
 }
 
 TEST(ScanCorrespondence, WhatIsNoBodyIsStillRefused) {
