@@ -45,6 +45,7 @@ int RunRun(const ParsedArgs& args, const Context& context) {
     throw UsageError("--photo-full-res-rounds: must be within [0, --photo-rounds = " + std::to_string(options.photo_rounds) + "]");
   options.landmarks = !args.has("no-landmarks");
   options.girth_inflation = GirthInflationFromArgs(args);
+  options.shape_samples = ShapeSamplesFromArgs(args);
   options.threads = args.get_int("threads", options.threads);
   if (options.threads < 1 || options.threads > 64) throw UsageError("--threads: must be within [1, 64]");
   options.fps = args.get_double("fps", 0.0);
@@ -98,6 +99,7 @@ CommandSpec MakeRunCommand() {
       {"photo-rounds", "N", "rounds of the photo-consistency refinement per frame (default 5)"},
       {"photo-full-res-rounds", "N", "of those, the last N measure the flow between cameras at full resolution instead of half: sharper texture on fine patterns (default 2, or all of fewer rounds)"},
       GirthInflationOptionSpec(),
+      ShapeSamplesOptionSpec(),
       {"no-landmarks", "", "track from the silhouettes alone, without BlazePose's body landmarks (first frame, lost limbs, every 5th frame)"},
       {"no-render", "", "skip the 3D-video render stage"},
       {"render-width", "PX", "width of the orbit video (default 960)"},

@@ -35,6 +35,7 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
   inputs.tracker.fit.downscale = args.get_int("downscale", inputs.tracker.fit.downscale);
   inputs.tracker.fit.num_threads = args.get_int("threads", inputs.tracker.fit.num_threads);
   if (const std::optional<double> inflation = GirthInflationFromArgs(args)) inputs.tracker.InflateGirthsAlways(*inflation);
+  if (const std::optional<int> samples = ShapeSamplesFromArgs(args)) inputs.tracker.shape_samples = *samples;
   inputs.tracker.Check();
   inputs.landmarks = !args.has("no-landmarks");
   TrackingReportOptions report_options;
@@ -86,6 +87,7 @@ CommandSpec MakeTrackCommand() {
       {"downscale", "N", "mask reduction for fitting (default 0 = automatic, about 256 px across)"},
       {"threads", "N", "solver threads (default 2)"},
       GirthInflationOptionSpec(),
+      ShapeSamplesOptionSpec(),
       {"no-landmarks", "", "do not ask BlazePose's landmarks where a limb is ambiguous (first frame, lost limbs, every 5th frame)"},
   };
   spec.run = RunTrack;

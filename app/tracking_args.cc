@@ -18,4 +18,17 @@ std::optional<double> GirthInflationFromArgs(const ParsedArgs& args) {
   return fraction;
 }
 
+OptionSpec ShapeSamplesOptionSpec() {
+  return {"shape-samples", "N",
+          "learn the body's shape from the first frame and every 5th after it, N frames in all (the frames "
+          "after the first are tracked ahead once for it; default 6; 0 or 1 = the first frame's shape alone)"};
+}
+
+std::optional<int> ShapeSamplesFromArgs(const ParsedArgs& args) {
+  if (!args.has("shape-samples")) return std::nullopt;
+  const int samples = args.get_int("shape-samples", 0);
+  if (samples < 0 || samples > 50) throw UsageError("--shape-samples: must be within [0, 50]");
+  return samples;
+}
+
 }  // namespace confluent::app

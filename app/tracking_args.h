@@ -14,4 +14,11 @@ OptionSpec GirthInflationOptionSpec();
 // tracker's automatic default). Throws UsageError outside [0, 0.5].
 std::optional<double> GirthInflationFromArgs(const ParsedArgs& args);
 
+// --shape-samples N.
+OptionSpec ShapeSamplesOptionSpec();
+
+// --shape-samples's count (TrackerOptions::shape_samples); empty when absent. Throws UsageError
+// outside [0, 50].
+std::optional<int> ShapeSamplesFromArgs(const ParsedArgs& args);
+
 }  // namespace confluent::app

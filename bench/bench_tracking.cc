@@ -41,56 +41,63 @@ struct Sequence {
   std::vector<std::vector<Image>> masks;  // [frame][camera]
 };
 
-const Sequence& GetSequence() {
-  static const Sequence sequence = [] {
-    Sequence s;
-    const char* capture_dir = std::getenv("CONFLUENT_BENCH_TRACK_CAPTURE");
-    const char* masks_dir = std::getenv("CONFLUENT_BENCH_TRACK_MASKS");
-    const int frames = 16;
-    if (capture_dir && masks_dir) {
-      CaptureOptions options;
-      options.check_every_image_header = false;
-      const Capture capture = Capture::Open(capture_dir, options);
-      for (const Camera& camera : capture.rig().cameras)
-        if (camera.name.rfind("holdout", 0) != 0) s.rig.cameras.push_back(camera);
-      for (int f = 0; f < frames; ++f) {
-        std::vector<Image> row;
-        for (const Camera& camera : s.rig.cameras) {
-          char name[32];
-          std::snprintf(name, sizeof name, "/%06d.png", f);
-          Image m = ReadImage(std::string(masks_dir) + "/" + camera.name + name);
-          Image mask(m.width, m.height, 1);
-          for (int i = 0; i < m.width * m.height; ++i) mask.data[i] = m.data[i * m.channels] >= 128 ? 255 : 0;
-          row.push_back(std::move(mask));
-        }
-        s.masks.push_back(std::move(row));
-      }
-      return s;
-    }
-    for (int i = 0; i < 8; ++i) {
-      const double a = 2 * M_PI * i / 8;
-      s.rig.cameras.push_back(LookAt("cam" + std::to_string(i), Eigen::Vector3d(3.8 * std::sin(a), 3.8 * std::cos(a), 1.6 + 0.5 * (i % 2)),
-                                     Eigen::Vector3d(0, 0, 1.0)));
-    }
-    const BodyTemplate body;
-    const BodyShape shape = BodyShape::Uniform(1.75);
+Sequence MakeSequence(int frames) {
+  Sequence s;
+  const char* capture_dir = std::getenv("CONFLUENT_BENCH_TRACK_CAPTURE");
+  const char* masks_dir = std::getenv("CONFLUENT_BENCH_TRACK_MASKS");
+  if (capture_dir && masks_dir) {
+    CaptureOptions options;
+    options.check_every_image_header = false;
+    const Capture capture = Capture::Open(capture_dir, options);
+    for (const Camera& camera : capture.rig().cameras)
+      if (camera.name.rfind("holdout", 0) != 0) s.rig.cameras.push_back(camera);
     for (int f = 0; f < frames; ++f) {
-      const double t = f / 25.0;
-      TemplatePose pose;
-      pose.root_rotation = Eigen::Vector3d(0, 0, 0.8 * t);
-      pose.root_translation = Eigen::Vector3d(0.1 * t, 0, 0);
-      pose.dofs[kJointLeftShoulder] = {0.5 * std::sin(4 * t), 1.2 * t, 0};
-      pose.dofs[kJointRightShoulder] = {-0.5 * std::sin(4 * t), -1.0 * t, 0};
-      pose.dofs[kJointLeftElbow] = {0.3 + 0.6 * t, 0, 0};
-      pose.dofs[kJointLeftHip] = {0.6 * std::sin(3 * t), 0, 0};
-      pose.dofs[kJointLeftKnee] = {-0.8 * t, 0, 0};
-      const Mesh mesh = body.PosedMesh(shape, pose);
       std::vector<Image> row;
-      for (const Camera& camera : s.rig.cameras) row.push_back(RasterizeSilhouette(mesh, camera, 1));
+      for (const Camera& camera : s.rig.cameras) {
+        char name[32];
+        std::snprintf(name, sizeof name, "/%06d.png", f);
+        Image m = ReadImage(std::string(masks_dir) + "/" + camera.name + name);
+        Image mask(m.width, m.height, 1);
+        for (int i = 0; i < m.width * m.height; ++i) mask.data[i] = m.data[i * m.channels] >= 128 ? 255 : 0;
+        row.push_back(std::move(mask));
+      }
       s.masks.push_back(std::move(row));
     }
     return s;
-  }();
+  }
+  for (int i = 0; i < 8; ++i) {
+    const double a = 2 * M_PI * i / 8;
+    s.rig.cameras.push_back(LookAt("cam" + std::to_string(i), Eigen::Vector3d(3.8 * std::sin(a), 3.8 * std::cos(a), 1.6 + 0.5 * (i % 2)),
+                                   Eigen::Vector3d(0, 0, 1.0)));
+  }
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(1.75);
+  for (int f = 0; f < frames; ++f) {
+    const double t = f / 25.0;
+    TemplatePose pose;
+    pose.root_rotation = Eigen::Vector3d(0, 0, 0.8 * t);
+    pose.root_translation = Eigen::Vector3d(0.1 * t, 0, 0);
+    pose.dofs[kJointLeftShoulder] = {0.5 * std::sin(4 * t), 1.2 * t, 0};
+    pose.dofs[kJointRightShoulder] = {-0.5 * std::sin(4 * t), -1.0 * t, 0};
+    pose.dofs[kJointLeftElbow] = {0.3 + 0.6 * t, 0, 0};
+    pose.dofs[kJointLeftHip] = {0.6 * std::sin(3 * t), 0, 0};
+    pose.dofs[kJointLeftKnee] = {-0.8 * t, 0, 0};
+    const Mesh mesh = body.PosedMesh(shape, pose);
+    std::vector<Image> row;
+    for (const Camera& camera : s.rig.cameras) row.push_back(RasterizeSilhouette(mesh, camera, 1));
+    s.masks.push_back(std::move(row));
+  }
+  return s;
+}
+
+// 16 frames; 26 for the shape learned over the first frames (TrackerOptions::shape_samples: the
+// first frame and every 5th after it, 6 in all).
+const Sequence& GetSequence() {
+  static const Sequence sequence = MakeSequence(16);
+  return sequence;
+}
+const Sequence& GetLongSequence() {
+  static const Sequence sequence = MakeSequence(26);
   return sequence;
 }
 
@@ -115,6 +122,21 @@ void BM_InitializeFirstFrame(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_InitializeFirstFrame)->Unit(benchmark::kSecond)->Iterations(1);
+
+// The same with the shape learned over the first frames, as `confluent run` does: frames 1-25
+// tracked ahead, the shape fitted on 6 of them, the first frame fitted again.
+void BM_InitializeFirstFrameLearningTheShape(benchmark::State& state) {
+  const Sequence& s = GetLongSequence();
+  for (auto _ : state) {
+    Tracker tracker(s.rig, {});
+    tracker.UseLaterMasks([&s](int frame) {
+      return frame < static_cast<int>(s.masks.size()) ? s.masks[frame] : std::vector<Image>();
+    });
+    const TrackedFrame result = tracker.Initialize(0, s.masks[0]);
+    benchmark::DoNotOptimize(result.mean_iou);
+  }
+}
+BENCHMARK(BM_InitializeFirstFrameLearningTheShape)->Unit(benchmark::kSecond)->Iterations(1);
 
 // One full tracking step (prediction, observation preparation, fit, overlap check).
 void BM_TrackFrame(benchmark::State& state) {

@@ -16,6 +16,7 @@ FrameLandmarks::~FrameLandmarks() = default;
 
 std::shared_ptr<const LandmarkJoints> FrameLandmarks::Joints(int frame) {
   if (unavailable_) return nullptr;
+  if (const auto known = found_.find(frame); known != found_.end()) return known->second;
   if (!segmenter_) {
     try {
       segmenter_ = std::make_unique<PersonSegmenter>();
@@ -45,6 +46,7 @@ std::shared_ptr<const LandmarkJoints> FrameLandmarks::Joints(int frame) {
   }
   auto joints = std::make_shared<LandmarkJoints>(TriangulateLandmarkJoints(rig, views));
   notes_.push_back("frame " + std::to_string(frame) + ": landmarks " + DescribeLandmarkJoints(*joints));
+  found_[frame] = joints;
   return joints;
 }
 

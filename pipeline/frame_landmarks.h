@@ -4,6 +4,7 @@
 // (tracking/landmark_joints.h). The segmenter starts on the first request; without Node.js or
 // the model there are no landmarks, and a note says why.
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -23,7 +24,8 @@ class FrameLandmarks {
   FrameLandmarks(const FrameLandmarks&) = delete;
   FrameLandmarks& operator=(const FrameLandmarks&) = delete;
 
-  // The joints of `frame`; null when the segmenter cannot start.
+  // The joints of `frame` (each frame's images are looked at once: the tracker's look-ahead over
+  // the first frames asks for the same frames again); null when the segmenter cannot start.
   std::shared_ptr<const LandmarkJoints> Joints(int frame);
   // One line per frame asked ("frame 0: landmarks placed 12 of 14 joints ..."), or why none.
   const std::vector<std::string>& notes() const { return notes_; }
@@ -34,6 +36,7 @@ class FrameLandmarks {
   std::unique_ptr<PersonSegmenter> segmenter_;
   bool unavailable_ = false;
   std::vector<std::string> notes_;
+  std::map<int, std::shared_ptr<const LandmarkJoints>> found_;
 };
 
 // "placed 12 of 14 joints (rms 3.1 px, 6-8 cameras agreeing)": for a run's notes.

@@ -71,6 +71,7 @@ std::string RunCapture(const RunOptions& options, const std::function<ProgressCa
   inputs.threads = options.threads;
   inputs.landmarks = options.landmarks;
   if (options.girth_inflation) inputs.tracker.InflateGirthsAlways(*options.girth_inflation);
+  if (options.shape_samples) inputs.tracker.shape_samples = *options.shape_samples;
   inputs.tracker.Check();
 
   fs::create_directories(inputs.folder.root);

@@ -32,6 +32,7 @@ struct RunOptions {
   int photo_full_resolution_rounds = 2;  // RunInputs::photo_full_resolution_rounds
   bool landmarks = true;               // RunInputs::landmarks
   std::optional<double> girth_inflation;  // TrackerOptions::InflateGirthsAlways; absent: the tracker's automatic default
+  std::optional<int> shape_samples;       // TrackerOptions::shape_samples; absent: the tracker's default
   bool render = true;                  // the orbit 3D video
   RenderStageOptions render_options;
   int threads = 2;

@@ -165,6 +165,14 @@ StageReport RunTrackingStage(const RunInputs& inputs, const BodyTemplate& body, 
   tracking_cameras.flip();
   FrameLandmarks landmarks(*inputs.capture, tracking_cameras);
   if (inputs.landmarks) tracker.UseLandmarks([&landmarks](int frame) { return landmarks.Joints(frame); });
+  // The shape is learned over the first frames whose masks are there (a first shard's own).
+  tracker.UseLaterMasks([&inputs](int frame) {
+    const Rig& rig = inputs.capture->rig();
+    for (int c = 0; c < rig.size(); ++c)
+      if (!inputs.cameras.is_held_out(c) && (frame >= inputs.capture->num_frames() || !fs::exists(RunMaskPath(inputs, c, frame))))
+        return std::vector<Image>();
+    return TrackingMasks(inputs, frame);
+  });
   auto read_state = [&](int frame) {
     PosesFile state = ReadPosesJson(inputs.folder.TrackingStatePath(frame), body, camera_names);
     if (state.frames.size() != 1) throw InputError(inputs.folder.TrackingStatePath(frame), "expected one frame");

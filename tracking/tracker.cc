@@ -84,6 +84,8 @@ void TrackerOptions::Check() const {
                 "in [0, 1)");
   RequireOption(init_rest_pull_min_iou_gain >= 0 && init_rest_pull_min_iou_gain < 1,
                 owner + "init_rest_pull_min_iou_gain", init_rest_pull_min_iou_gain, "in [0, 1)");
+  RequireOption(shape_samples >= 0, owner + "shape_samples", shape_samples, ">= 0");
+  RequireOption(shape_sample_every >= 1, owner + "shape_sample_every", shape_sample_every, ">= 1");
   RequireOption(skirt_try_below_iou >= 0 && skirt_try_below_iou <= 1, owner + "skirt_try_below_iou",
                 skirt_try_below_iou, "in [0, 1]");
   skirt_search.Check(owner + "skirt_search.");
@@ -342,6 +344,7 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   iou_history_.push_back(result.mean_iou);
   contour_history_.push_back(result.fit.mean_contour_px);
   for (const Image& m : masks) last_mask_hashes_.push_back(HashMask(m));
+  LearnShapeOverFirstFrames(masks, use, observations, &result);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   return result;

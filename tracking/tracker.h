@@ -137,6 +137,16 @@ struct TrackerOptions {
   double arm_twist_max_elbow_rad = 20.0 * M_PI / 180.0;
   double arm_twist_bend_rad = 30.0 * M_PI / 180.0;
   double arm_twist_min_gain = 0.002;
+  // The shape learned over the first frames: the first frame's fit holds the body to human
+  // proportions (init_shape_proportion_weight), so a long-haired head, thin shanks or a heavy
+  // torso come out as an average body. With later frames' masks (Tracker::UseLaterMasks), the
+  // frames after the first are tracked ahead with that shape, the shape and pose are fitted
+  // freely (fit's shape priors) on the first frame and every `shape_sample_every`-th one after it,
+  // `shape_samples` in all, and their median girths and cross-sections (not lengths: those stay
+  // the first fit's) are the tracker's shape from the first frame on (flag "shape:<samples>").
+  // 1 or less: the first frame's shape.
+  int shape_samples = 6;
+  int shape_sample_every = 5;
   // --girth-inflation F: grow the girths by up to F whatever the first frame's overlap (0: never).
   void InflateGirthsAlways(double max_fraction) {
     girth_inflation_max = max_fraction;
@@ -200,6 +210,10 @@ class Tracker {
   // TrackerOptions::landmark_check_every frames: the landmarks settle limbs that the silhouettes
   // leave ambiguous (flag "landmarks:<limb>").
   void UseLandmarks(LandmarkSource source) { landmarks_ = std::move(source); }
+  // The masks of a later frame, one per rig camera, for the shape learned over the first frames
+  // (TrackerOptions::shape_samples); an empty vector for a frame it does not have.
+  using MaskSource = std::function<std::vector<Image>(int frame)>;
+  void UseLaterMasks(MaskSource source) { later_masks_ = std::move(source); }
 
   // Continues from saved state instead of Initialize (a resumed run, or a shard boundary): the
   // fitted shape, the accepted poses of the frames just before (the last 4 are used) and their
@@ -247,6 +261,10 @@ class Tracker {
   // The pose is then fitted again, kept when it overlaps better.
   void SearchSkirtShape(const std::vector<Image>& masks, const std::vector<bool>& use,
                         const SilhouetteObservations& observations, TrackedFrame* result);
+  // TrackerOptions::shape_samples: the first frame's shape and `result` (that frame's fit)
+  // replaced by the median of shapes fitted over the first frames, tracked ahead on a copy.
+  void LearnShapeOverFirstFrames(const std::vector<Image>& masks, const std::vector<bool>& use,
+                                 const SilhouetteObservations& observations, TrackedFrame* result);
   // Grows every girth of the shape where that overlaps the masks better (TrackerOptions::girth_inflation_max).
   void InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result);
   // Initialize's fit of the first frame from `start_shape`, with the pulls towards rest angles
@@ -272,6 +290,7 @@ class Tracker {
   double init_rest_prior_scale_ = 0.0;
   std::vector<std::size_t> last_mask_hashes_;
   LandmarkSource landmarks_;
+  MaskSource later_masks_;
   FruitlessLimbSearch fruitless_search_;
 };
 

@@ -49,6 +49,12 @@ TEST(TrackingOptions, CheckNamesTheFieldAndTheValue) {
   tracker.limb_search_repeat_rise = 0.9;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.limb_search_repeat_rise = 0.9: must be >= 1");
   tracker = TrackerOptions();
+  tracker.shape_samples = -1;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.shape_samples = -1: must be >= 0");
+  tracker = TrackerOptions();
+  tracker.shape_sample_every = 0;
+  testing::ExpectCheckRefuses(tracker, "TrackerOptions.shape_sample_every = 0: must be >= 1");
+  tracker = TrackerOptions();
   tracker.arm_twist_every = -1;
   testing::ExpectCheckRefuses(tracker, "TrackerOptions.arm_twist_every = -1: must be >= 0");
   tracker = TrackerOptions();

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -41,6 +43,9 @@ TEST(TrackCommand, TracksTheTinyStudioCapture) {
   for (const nlohmann::json& frame : poses.at("frames")) searched += frame.value("limb_search", std::string()) == "ran";
   EXPECT_EQ(summary.at("limb_search_frames").get<int>(), searched);
   EXPECT_TRUE(poses.at("shape").at("length_scale").contains("left_forearm"));
+  // The shape was learned over the first frames: frame 0 and frame 5 (the capture has 10).
+  const std::vector<std::string> first_flags = poses.at("frames")[0].at("flags");
+  EXPECT_NE(std::find(first_flags.begin(), first_flags.end(), "shape:2"), first_flags.end());
   BvhReadOptions options;
   options.scale = 0.01;
   options.y_up_to_z_up = true;
@@ -69,6 +74,10 @@ TEST(TrackCommand, TracksTheTinyStudioCapture) {
       {"track", capture, "--masks", gt + "/masks", "--girth-inflation", "0.7", "--out", dir / "run3"});
   EXPECT_NE(fat.exit_code, 0);
   EXPECT_NE(fat.stderr_text.find("--girth-inflation: must be within [0, 0.5]"), std::string::npos) << fat.stderr_text;
+  const testing::CommandResult many = testing::RunConfluent(
+      {"track", capture, "--masks", gt + "/masks", "--shape-samples", "51", "--out", dir / "run4"});
+  EXPECT_NE(many.exit_code, 0);
+  EXPECT_NE(many.stderr_text.find("--shape-samples: must be within [0, 50]"), std::string::npos) << many.stderr_text;
 }
 
 }  // namespace
