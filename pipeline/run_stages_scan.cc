@@ -26,6 +26,18 @@
 namespace confluent {
 namespace fs = std::filesystem;
 
+namespace {
+
+// The mean IoU over the tracking cameras of the template in `pose` with one frame's `masks`
+// (TrackingMasks), at the tracker's resolution.
+double TrackingOverlap(const RunInputs& inputs, const BodyTemplate& body, const BodyShape& shape,
+                       const TemplatePose& pose, const std::vector<Image>& masks) {
+  return MeanSilhouetteIoU(
+      SilhouetteIoUs(body.PosedMesh(shape, pose), inputs.capture->rig(), masks, {}, inputs.tracker.iou_downscale));
+}
+
+}  // namespace
+
 StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& body, const BodyShape& shape,
                                    TimingLog* timings) {
   StageReport report("correspondences");
@@ -53,8 +65,7 @@ StageReport RunCorrespondenceStage(const RunInputs& inputs, const BodyTemplate& 
   }
   if (!first_masks.empty()) {
     options.first_frame_overlap = [&](const TemplatePose& pose) {
-      return MeanSilhouetteIoU(SilhouetteIoUs(body.PosedMesh(shape, pose), inputs.capture->rig(), first_masks, {},
-                                              inputs.tracker.iou_downscale));
+      return TrackingOverlap(inputs, body, shape, pose, first_masks);
     };
   }
   // Without frame 0 (a first shard that starts later) the registration goes without the first
@@ -97,15 +108,19 @@ std::optional<RunSeam> ReadRunSeam(const RunInputs& inputs, const BodyTemplate& 
       if (f.frame == frame) return &f.pose;
     return nullptr;
   };
+  // Each frame's masks are read once (FirstPoseSeamEnd asks two poses per frame).
+  int masks_frame = -1;
+  std::vector<Image> masks;
   auto overlap = [&](int frame, const TemplatePose& pose) -> std::optional<double> {
-    std::vector<Image> masks;
-    try {
-      masks = TrackingMasks(inputs, frame);
-    } catch (const InputError&) {
-      return std::nullopt;  // a shard's masks not there yet: the seam eases as planned
+    if (frame != masks_frame) {
+      try {
+        masks = TrackingMasks(inputs, frame);
+      } catch (const InputError&) {
+        return std::nullopt;  // a shard's masks not there yet: the seam eases as planned
+      }
+      masks_frame = frame;
     }
-    return MeanSilhouetteIoU(SilhouetteIoUs(body.PosedMesh(run.tracked.shape, pose), inputs.capture->rig(), masks, {},
-                                            inputs.tracker.iou_downscale));
+    return TrackingOverlap(inputs, body, run.tracked.shape, pose, masks);
   };
   run.seam.tracked_from = FirstPoseSeamEnd(body, run.seam, tracked, overlap);
   return run;

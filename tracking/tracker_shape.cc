@@ -1,32 +1,25 @@
 // The Tracker's shape learned over the first frames (TrackerOptions::shape_samples).
 
-#include <algorithm>
-#include <array>
 #include <string>
 #include <vector>
 
+#include "core/statistics.h"
 #include "tracking/tracker.h"
 
 namespace confluent {
 
 namespace {
 
-// The median of `values` (not empty; the upper one of the two middle values for an even count).
-double Median(std::vector<double> values) {
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
-// Per parameter, the median over `shapes` (not empty).
-BodyShape MedianShape(const std::vector<BodyShape>& shapes) {
+// `base` with each girth, cross-section and skirt parameter the median over `shapes` (not
+// empty); the lengths stay `base`'s.
+BodyShape MedianGirthsAndSections(const BodyShape& base, const std::vector<BodyShape>& shapes) {
   auto median_of = [&](auto value_of) {
     std::vector<double> values;
     for (const BodyShape& shape : shapes) values.push_back(value_of(shape));
     return Median(std::move(values));
   };
-  BodyShape median = shapes.front();
+  BodyShape median = base;
   for (int s = 0; s < kNumBodySegments; ++s) {
-    median.length_scale[s] = median_of([s](const BodyShape& b) { return b.length_scale[s]; });
     median.girth_scale[s] = median_of([s](const BodyShape& b) { return b.girth_scale[s]; });
     median.depth_scale[s] = median_of([s](const BodyShape& b) { return b.depth_scale[s]; });
     median.taper_scale[s] = median_of([s](const BodyShape& b) { return b.taper_scale[s]; });
@@ -90,9 +83,7 @@ void Tracker::LearnShapeOverFirstFrames(const std::vector<Image>& masks, const s
   // The first frame again with the learned shape, from its pose.
   // The lengths stay the first fit's: silhouettes place a joint along its limb poorly, and the
   // free fits' lengths moved the joints (builtin's 0.44 -> 0.97 cm mean error at 1024x768).
-  const std::array<double, kNumBodySegments> lengths = shape_.length_scale;
-  shape_ = MedianShape(shapes);
-  shape_.length_scale = lengths;
+  shape_ = MedianGirthsAndSections(shape_, shapes);
   const TemplatePose first_pose = result->pose;
   result->fit = FitTemplateToSilhouettes(body_, observations, first_frame_fit, &shape_, &result->pose, &first_pose);
   Evaluate(shape_, masks, use, result);
