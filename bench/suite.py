@@ -114,21 +114,51 @@ def step(tag, name, cmd, logfile):
     return seconds
 
 
+def longest_stretch(flags, min_frames=6):
+    """The longest run of >= min_frames consecutive true flags, as (first, last), or None."""
+    best, start = None, None
+    for i, flag in enumerate(list(flags) + [False]):
+        if flag and start is None:
+            start = i
+        elif not flag and start is not None:
+            if i - start >= min_frames and (best is None or i - start > best[1] - best[0] + 1):
+                best = (start, i - 1)
+            start = None
+    return best
+
+
 def lost_limb(ious, min_frames=6, drop=0.05):
     """The longest stretch of >= min_frames frames whose tracking-camera IoU is more than `drop`
     below the median, as (first, last), or None."""
     if not ious:
         return None
     limit = statistics.median(ious) - drop
-    best, start = None, None
-    for i, iou in enumerate(ious + [float("inf")]):
-        if iou < limit and start is None:
-            start = i
-        elif iou >= limit and start is not None:
-            if i - start >= min_frames and (best is None or i - start > best[1] - best[0] + 1):
-                best = (start, i - 1)
-            start = None
-    return best
+    return longest_stretch([iou < limit for iou in ious], min_frames)
+
+
+# The limbs' articulation joints, for the joint-error companion of the lost-limb test.
+LIMB_OFF_CM = 10.0
+LIMB_JOINTS = [f"{side}_{joint}" for side in ("left", "right") for joint in ("elbow", "wrist", "knee", "ankle")]
+
+
+def limb_joint_errors(frames, joints_path):
+    """Per tracked frame, the largest error (cm) of a limb's elbow, wrist, knee or ankle against the
+    studio's joints (joints.json of `confluent synth`), with the joint's name; None without truth."""
+    if not os.path.exists(joints_path):
+        return None
+    truth = json.load(open(joints_path))
+    index = {n: i for i, n in enumerate(truth["joint_names"])}
+    true_frames = {f["frame"]: f["positions"] for f in truth["frames"]}
+    errors = []
+    for f in frames:
+        names = f.get("joint_names") or []
+        worst = (0.0, "")
+        for joint in LIMB_JOINTS:
+            if joint in names and joint in index and f["frame"] in true_frames:
+                a, b = f["joint_positions"][names.index(joint)], true_frames[f["frame"]][index[joint]]
+                worst = max(worst, (100 * sum((x - y) ** 2 for x, y in zip(a, b)) ** 0.5, joint))
+        errors.append(worst)
+    return errors
 
 
 def collect(run_dir, worst_dir, name):
@@ -151,7 +181,10 @@ def collect(run_dir, worst_dir, name):
             m["joint_error_mean_cm"] = 100 * summary["joint_error_mean_m"]
             m["joint_error_p95_cm"] = 100 * summary["joint_error_p95_m"]
     # Tracking flags and the per-frame IoU on the tracking cameras (poses.json).
-    frames = sorted(json.load(open(os.path.join(run_dir, "poses.json")))["frames"], key=lambda f: f["frame"])
+    poses = json.load(open(os.path.join(run_dir, "poses.json")))
+    frames = sorted(poses["frames"], key=lambda f: f["frame"])
+    for f in frames:
+        f["joint_names"] = poses.get("joint_names", [])
     flags = [f.get("flags", []) for f in frames]
     m["flagged"] = sum(any(x != "initialized" for x in fl) for fl in flags)
     m["recovered"] = sum("recovered" in fl for fl in flags)
@@ -161,6 +194,15 @@ def collect(run_dir, worst_dir, name):
     stretch = lost_limb(ious)
     m["lost_limb"] = stretch is not None
     m["lost_limb_frames"] = f"{frames[stretch[0]]['frame']}-{frames[stretch[1]]['frame']}" if stretch else ""
+    # Beside it (not instead of it), the same question asked of the joints: a limb's elbow, wrist,
+    # knee or ankle more than LIMB_OFF_CM from the truth for more than 5 frames. Overlap also falls
+    # where the template's surface cannot follow a pose (a cartwheel's handstand) with every limb in place.
+    limb_errors = limb_joint_errors(frames, os.path.join(os.path.dirname(run_dir), "capture_gt", "joints.json"))
+    if limb_errors:
+        m["limb_joint_max_cm"], m["limb_joint_max_name"] = max(limb_errors)
+        stretch = longest_stretch([e > LIMB_OFF_CM for e, _ in limb_errors])
+        m["limb_off"] = stretch is not None
+        m["limb_off_frames"] = f"{frames[stretch[0]]['frame']}-{frames[stretch[1]]['frame']}" if stretch else ""
     # Seconds per frame of the run: every row of timings.csv (once-per-run rows included).
     with open(os.path.join(run_dir, "timings.csv")) as f:
         total = sum(float(line.split(",")[2]) for line in f.readlines()[1:] if line.count(",") == 2)
@@ -252,17 +294,21 @@ def fmt(r, key, spec):
 def write_table(path, results, header, contact_sheet):
     lines = [f"# Motion suite", "", header, "",
              "| capture | status | scan IoU mean | scan IoU min | template IoU mean | PSNR dB | joint err cm (mean / p95) "
-             "| scan vertex err cm (frame 0: mm) | flagged (recovered / bad) | s/frame | lost limb | worst frames (IoU) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| scan vertex err cm (frame 0: mm) | flagged (recovered / bad) | s/frame | lost limb | limb joint off (worst cm) | worst frames (IoU) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         ok = r["status"] == "ok"
         joint = f"{fmt(r, 'joint_error_mean_cm', '.1f')} / {fmt(r, 'joint_error_p95_cm', '.1f')}" if ok else "-"
         flagged = f"{r['flagged']} ({r['recovered']} / {r['bad']})" if ok else "-"
         lost = ("yes, " + r["lost_limb_frames"] if r["lost_limb"] else "no") if ok else "-"
+        limb_off = "-"
+        if ok and "limb_off" in r:
+            limb_off = (("yes, " + r["limb_off_frames"]) if r["limb_off"] else "no") + \
+                f" ({r['limb_joint_max_cm']:.1f} {r['limb_joint_max_name'].replace('_', ' ')})"
         worst = ", ".join(f"{w['frame']} ({w['iou']:.3f})" for w in r.get("worst", []))
         lines.append(f"| {r['name']} | {r['status']} | {fmt(r, 'scan_iou_mean', '.4f')} | {fmt(r, 'scan_iou_min', '.4f')} "
                      f"| {fmt(r, 'template_iou_mean', '.4f')} | {fmt(r, 'psnr_db', '.2f')} | {joint} "
-                     f"| {fmt(r, 'vertex_error_cm', '.2f')} ({fmt(r, 'vertex_error_frame0_mm', '.1f')}) | {flagged} | {fmt(r, 'seconds_per_frame', '.2f')} | {lost} | {worst} |")
+                     f"| {fmt(r, 'vertex_error_cm', '.2f')} ({fmt(r, 'vertex_error_frame0_mm', '.1f')}) | {flagged} | {fmt(r, 'seconds_per_frame', '.2f')} | {lost} | {limb_off} | {worst} |")
     lines += ["", "Legend: IoU and PSNR are `confluent evaluate`'s on the two held-out cameras (holdout0, holdout1) "
               "against the ground-truth masks, every frame, views over the clean plates (its defaults); PSNR is the "
               "scan's, inside the union of the silhouettes. Joint error: `confluent track --gt-joints` on the finished "
@@ -270,7 +316,9 @@ def write_table(path, results, header, contact_sheet):
               "against the ground-truth meshes (in brackets: frame 0, mm; the scan_pose_* captures' scan is the actor's frame-0 mesh). Flagged: frames the tracker marked (recovered, bad, low overlap ...). "
               "s/frame: every stage of `confluent run` (RUN/timings.csv) over the frames. Lost limb: a stretch of "
               "more than 5 frames whose tracking-camera IoU (poses.json) is more than 0.05 below the capture's "
-              f"median. Worst frames: by held-out scan IoU (worst camera); their side-by-side pictures are in {contact_sheet}.",
+              f"median. Limb joint off, beside it: a stretch of more than 5 frames where an elbow, wrist, knee or ankle is "
+              f"more than {LIMB_OFF_CM:.0f} cm from the studio's joint (in brackets: the largest such error over the frames, "
+              f"and its joint). Worst frames: by held-out scan IoU (worst camera); their side-by-side pictures are in {contact_sheet}.",
               ""]
     with open(path, "w") as f:
         f.write("\n".join(lines))
