@@ -79,9 +79,11 @@ BodyTemplate::BodyTemplate(int longitudes) {
   dofs_[kJointChest] = Ball(-35, 30, -30, 30, -45, 45);
   // The cervical spine bends at its base too: without it a head bowed or raised sits where an
   // upright neck puts it (the head joint 2-5 cm off on performances that look up or down). No
-  // twist: the head's own turns it, and the two would trade it from frame to frame.
-  dofs_[kJointNeck] = Hinge2(Vector3d::UnitX(), -35, 35, Vector3d::UnitY(), -25, 25);
-  dofs_[kJointHead] = Ball(-50, 50, -45, 45, -80, 80);
+  // twist: the head's own turns it, and the two would trade it from frame to frame. The ranges
+  // reach a head thrown back and to the side (a jumper's at take-off; at 35 and 25 degrees here,
+  // 50 and 45 at the head, the template lost that head for 9 frames, 4-7 cm off).
+  dofs_[kJointNeck] = Hinge2(Vector3d::UnitX(), -45, 45, Vector3d::UnitY(), -35, 35);
+  dofs_[kJointHead] = Ball(-60, 60, -55, 55, -80, 80);
   for (int side = 0; side < 2; ++side) {
     const int shoulder = side == 0 ? kJointLeftShoulder : kJointRightShoulder;
     dofs_[shoulder] = Ball(-170, 170, -170, 170, -170, 170);
