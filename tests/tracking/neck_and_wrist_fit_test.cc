@@ -51,6 +51,20 @@ std::vector<Image> Masks(const StudioActor& actor, const Pose& pose, const Rig& 
   return masks;
 }
 
+// A tracking step (the pose only, held near the previous frame) from `start` to the silhouettes
+// of the actor in `pose`, seen by an 8-camera ring at 480x360.
+TemplatePose TrackStep(const StudioActor& actor, const Pose& pose, const BodyTemplate& body, const BodyShape& shape,
+                       const TemplatePose& start) {
+  const Rig rig = testing::CameraRing(8, 480, 360);
+  const std::vector<Image> masks = Masks(actor, pose, rig);
+  SilhouetteFitOptions options;
+  const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
+  BodyShape fitted_shape = shape;
+  TemplatePose fitted = start;
+  FitTemplateToSilhouettes(body, observations, options, &fitted_shape, &fitted);
+  return fitted;
+}
+
 TEST(NeckAndWristFit, ABowedHeadAndAHandBentSidewaysAreFollowed) {
   const StudioActor actor = Actor();
   const Pose before = FirstFrame(actor);
@@ -66,16 +80,7 @@ TEST(NeckAndWristFit, ABowedHeadAndAHandBentSidewaysAreFollowed) {
   const std::vector<Vector3d> joints_before = JointPositions(actor.skeleton, before);
   const std::vector<Vector3d> truth = JointPositions(actor.skeleton, after);
   const TemplatePose start = FitPoseToJoints(body, shape, joints_before, nullptr, TemplatePose{});
-
-  const Rig rig = testing::CameraRing(8, 480, 360);
-  const std::vector<Image> masks = Masks(actor, after, rig);
-
-  SilhouetteFitOptions options;  // a tracking step: the pose only, held near the previous frame
-  const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
-  BodyShape fitted_shape = shape;
-  TemplatePose pose = start;
-  FitTemplateToSilhouettes(body, observations, options, &fitted_shape, &pose);
-  const std::vector<Vector3d> fitted = body.JointPositions(shape, pose);
+  const std::vector<Vector3d> fitted = body.JointPositions(shape, TrackStep(actor, after, body, shape, start));
   const std::vector<Vector3d> started = body.JointPositions(shape, start);
 
   // The bow moves the head 4-5 cm; a head that only turns on an upright neck stays 2.4 cm off
@@ -112,15 +117,7 @@ TEST(NeckAndWristFit, AHeadThrownBackAndSidewaysIsFollowed) {
       before.local_rotations[kJointNeck].slerp(0.5, after.local_rotations[kJointNeck]);
   const TemplatePose start =
       FitPoseToJoints(body, shape, JointPositions(actor.skeleton, halfway), nullptr, TemplatePose{});
-
-  const Rig rig = testing::CameraRing(8, 480, 360);
-  const std::vector<Image> masks = Masks(actor, after, rig);
-  SilhouetteFitOptions options;
-  const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
-  BodyShape fitted_shape = shape;
-  TemplatePose pose = start;
-  FitTemplateToSilhouettes(body, observations, options, &fitted_shape, &pose);
-  const std::vector<Vector3d> fitted = body.JointPositions(shape, pose);
+  const std::vector<Vector3d> fitted = body.JointPositions(shape, TrackStep(actor, after, body, shape, start));
   const std::vector<Vector3d> started = body.JointPositions(shape, start);
 
   ASSERT_GT((truth[kJointHeadEnd] - JointPositions(actor.skeleton, before)[kJointHeadEnd]).norm(), 0.15);
