@@ -16,6 +16,7 @@ Usage: ./dev suite [--preset tiny|small|full] [--only NAME,...] [--out DIR] [--t
 import argparse
 import datetime
 import json
+import math
 import os
 import shutil
 import statistics
@@ -141,28 +142,28 @@ LIMB_OFF_CM = 10.0
 LIMB_JOINTS = [f"{side}_{joint}" for side in ("left", "right") for joint in ("elbow", "wrist", "knee", "ankle")]
 
 
-def limb_joint_errors(frames, joints_path):
-    """Per tracked frame, the largest error (cm) of a limb's elbow, wrist, knee or ankle against the
-    studio's joints (joints.json of `confluent synth`), with the joint's name; None without truth."""
-    if not os.path.exists(joints_path):
+def limb_joint_errors(frames, joint_names, joints_path):
+    """Per tracked frame (poses.json's, whose joints are `joint_names`), the largest error (cm) of a
+    limb's elbow, wrist, knee or ankle against the studio's joints (joints.json of `confluent synth`),
+    with the joint's name; None without that file."""
+    if not joints_path or not os.path.exists(joints_path):
         return None
     truth = json.load(open(joints_path))
-    index = {n: i for i, n in enumerate(truth["joint_names"])}
+    true_index = {n: i for i, n in enumerate(truth["joint_names"])}
+    tracked_index = {n: i for i, n in enumerate(joint_names)}
+    joints = [j for j in LIMB_JOINTS if j in true_index and j in tracked_index]
     true_frames = {f["frame"]: f["positions"] for f in truth["frames"]}
     errors = []
     for f in frames:
-        names = f.get("joint_names") or []
-        worst = (0.0, "")
-        for joint in LIMB_JOINTS:
-            if joint in names and joint in index and f["frame"] in true_frames:
-                a, b = f["joint_positions"][names.index(joint)], true_frames[f["frame"]][index[joint]]
-                worst = max(worst, (100 * sum((x - y) ** 2 for x, y in zip(a, b)) ** 0.5, joint))
-        errors.append(worst)
+        true = true_frames.get(f["frame"])
+        errors.append(max(((100 * math.dist(f["joint_positions"][tracked_index[j]], true[true_index[j]]), j)
+                           for j in joints if true), default=(0.0, "")))
     return errors
 
 
-def collect(run_dir, worst_dir, name):
-    """Reads the metrics of one finished capture into a flat dict."""
+def collect(run_dir, worst_dir, name, joints_path=None):
+    """Reads the metrics of one finished capture into a flat dict (`joints_path`: the studio's
+    joints.json, for the limb-joint test; None or absent: no such test)."""
     m = {}
     metrics = json.load(open(os.path.join(run_dir, "metrics.json")))
     m["scan_iou_mean"] = metrics["scan"]["iou_mean"]
@@ -183,8 +184,6 @@ def collect(run_dir, worst_dir, name):
     # Tracking flags and the per-frame IoU on the tracking cameras (poses.json).
     poses = json.load(open(os.path.join(run_dir, "poses.json")))
     frames = sorted(poses["frames"], key=lambda f: f["frame"])
-    for f in frames:
-        f["joint_names"] = poses.get("joint_names", [])
     flags = [f.get("flags", []) for f in frames]
     m["flagged"] = sum(any(x != "initialized" for x in fl) for fl in flags)
     m["recovered"] = sum("recovered" in fl for fl in flags)
@@ -197,7 +196,7 @@ def collect(run_dir, worst_dir, name):
     # Beside it (not instead of it), the same question asked of the joints: a limb's elbow, wrist,
     # knee or ankle more than LIMB_OFF_CM from the truth for more than 5 frames. Overlap also falls
     # where the template's surface cannot follow a pose (a cartwheel's handstand) with every limb in place.
-    limb_errors = limb_joint_errors(frames, os.path.join(os.path.dirname(run_dir), "capture_gt", "joints.json"))
+    limb_errors = limb_joint_errors(frames, poses.get("joint_names", []), joints_path)
     if limb_errors:
         m["limb_joint_max_cm"], m["limb_joint_max_name"] = max(limb_errors)
         stretch = longest_stretch([e > LIMB_OFF_CM for e, _ in limb_errors])
@@ -276,7 +275,7 @@ def run_capture(cap, i, n, args, build, preset_dir, synth_help):
         if os.path.exists(joints):
             step(tag, "joint error", [exe, "track", capture, "--out", run, "--masks", os.path.join(run, "masks"),
                                       "--gt-joints", joints, "--overlay-every", "0"] + excluded, logfile)
-        result.update(collect(run, os.path.join(preset_dir, "worst"), name))
+        result.update(collect(run, os.path.join(preset_dir, "worst"), name, joints))
     except StepFailed as e:
         result["status"] = str(e)
     except (OSError, ValueError, KeyError, IndexError, tarfile.TarError) as e:
