@@ -46,6 +46,7 @@ int RunRun(const ParsedArgs& args, const Context& context) {
   options.landmarks = !args.has("no-landmarks");
   options.girth_inflation = GirthInflationFromArgs(args);
   options.shape_samples = ShapeSamplesFromArgs(args);
+  options.fit_downscale = FitDownscaleFromArgs(args);
   options.threads = args.get_int("threads", options.threads);
   if (options.threads < 1 || options.threads > 64) throw UsageError("--threads: must be within [1, 64]");
   options.fps = args.get_double("fps", 0.0);
@@ -100,6 +101,7 @@ CommandSpec MakeRunCommand() {
       {"photo-full-res-rounds", "N", "of those, the last N measure the flow between cameras at full resolution instead of half: sharper texture on fine patterns (default 2, or all of fewer rounds)"},
       GirthInflationOptionSpec(),
       ShapeSamplesOptionSpec(),
+      FitDownscaleOptionSpec(),
       {"no-landmarks", "", "track from the silhouettes alone, without BlazePose's body landmarks (first frame, lost limbs, every 5th frame)"},
       {"no-render", "", "skip the 3D-video render stage"},
       {"render-width", "PX", "width of the orbit video (default 960)"},

@@ -32,7 +32,7 @@ int RunTrack(const ParsedArgs& args, const Context& context) {
     throw InputError(inputs.masks_dir, "no masks folder (run `confluent silhouettes` first, or pass --masks DIR)");
   inputs.frames = ParseFrameRange(args.get("frames"), capture.num_frames());
   inputs.fps = RunFrameRate(capture);
-  inputs.tracker.fit.downscale = args.get_int("downscale", inputs.tracker.fit.downscale);
+  if (const std::optional<int> factor = FitDownscaleFromArgs(args)) inputs.tracker.fit.downscale = *factor;
   inputs.tracker.fit.num_threads = args.get_int("threads", inputs.tracker.fit.num_threads);
   if (const std::optional<double> inflation = GirthInflationFromArgs(args)) inputs.tracker.InflateGirthsAlways(*inflation);
   if (const std::optional<int> samples = ShapeSamplesFromArgs(args)) inputs.tracker.shape_samples = *samples;
@@ -84,7 +84,7 @@ CommandSpec MakeTrackCommand() {
       {"frames", "A:B", "frame range, B exclusive (default: all frames)"},
       {"gt-joints", "FILE", "ground-truth joints.json of `confluent synth`: report the 3D joint error"},
       {"overlay-every", "N", "write overlays every N frames (default 25; 0 = none)"},
-      {"downscale", "N", "mask reduction for fitting (default 0 = automatic, about 256 px across)"},
+      FitDownscaleOptionSpec(),
       {"threads", "N", "solver threads (default 2)"},
       GirthInflationOptionSpec(),
       ShapeSamplesOptionSpec(),

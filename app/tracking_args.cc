@@ -31,4 +31,15 @@ std::optional<int> ShapeSamplesFromArgs(const ParsedArgs& args) {
   return samples;
 }
 
+OptionSpec FitDownscaleOptionSpec() {
+  return {"downscale", "N", "mask reduction for fitting (default 0 = automatic, about 512 px across)"};
+}
+
+std::optional<int> FitDownscaleFromArgs(const ParsedArgs& args) {
+  if (!args.has("downscale")) return std::nullopt;
+  const int factor = args.get_int("downscale", 0);
+  if (factor < 0 || factor > 16) throw UsageError("--downscale: must be within [0, 16]");
+  return factor;
+}
+
 }  // namespace confluent::app

@@ -21,4 +21,11 @@ OptionSpec ShapeSamplesOptionSpec();
 // outside [0, 50].
 std::optional<int> ShapeSamplesFromArgs(const ParsedArgs& args);
 
+// --downscale N.
+OptionSpec FitDownscaleOptionSpec();
+
+// --downscale's factor (SilhouetteFitOptions::downscale); empty when absent (automatic). Throws
+// UsageError outside [0, 16].
+std::optional<int> FitDownscaleFromArgs(const ParsedArgs& args);
+
 }  // namespace confluent::app

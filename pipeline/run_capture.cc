@@ -72,6 +72,7 @@ std::string RunCapture(const RunOptions& options, const std::function<ProgressCa
   inputs.landmarks = options.landmarks;
   if (options.girth_inflation) inputs.tracker.InflateGirthsAlways(*options.girth_inflation);
   if (options.shape_samples) inputs.tracker.shape_samples = *options.shape_samples;
+  if (options.fit_downscale) inputs.tracker.fit.downscale = *options.fit_downscale;
   inputs.tracker.Check();
 
   fs::create_directories(inputs.folder.root);

@@ -33,6 +33,7 @@ struct RunOptions {
   bool landmarks = true;               // RunInputs::landmarks
   std::optional<double> girth_inflation;  // TrackerOptions::InflateGirthsAlways; absent: the tracker's automatic default
   std::optional<int> shape_samples;       // TrackerOptions::shape_samples; absent: the tracker's default
+  std::optional<int> fit_downscale;       // SilhouetteFitOptions::downscale; absent: the tracker's default
   bool render = true;                  // the orbit 3D video
   RenderStageOptions render_options;
   int threads = 2;

@@ -512,13 +512,15 @@ TEST_F(RunCommandTest, OutOfRangeRefineKeyframesIsAUsageError) {
   }
 }
 
-TEST_F(RunCommandTest, OutOfRangePhotoRoundsAreUsageErrors) {
+TEST_F(RunCommandTest, OutOfRangePhotoRoundsAndFitScalesAreUsageErrors) {
   testing::TempDir out;
   const std::vector<std::vector<std::string>> bad = {{"--photo-rounds", "0"},
                                                      {"--photo-rounds", "21"},
                                                      {"--photo-full-res-rounds", "-1"},
                                                      {"--photo-full-res-rounds", "6"},  // more than the 5 rounds
-                                                     {"--photo-rounds", "3", "--photo-full-res-rounds", "4"}};
+                                                     {"--photo-rounds", "3", "--photo-full-res-rounds", "4"},
+                                                     {"--downscale", "-1"},
+                                                     {"--downscale", "17"}};
   for (const std::vector<std::string>& options : bad) {
     std::vector<std::string> command = {"run", Capture(), "--out", out / "run"};
     command.insert(command.end(), options.begin(), options.end());

@@ -78,6 +78,10 @@ TEST(TrackCommand, TracksTheTinyStudioCapture) {
       {"track", capture, "--masks", gt + "/masks", "--shape-samples", "51", "--out", dir / "run4"});
   EXPECT_NE(many.exit_code, 0);
   EXPECT_NE(many.stderr_text.find("--shape-samples: must be within [0, 50]"), std::string::npos) << many.stderr_text;
+  const testing::CommandResult coarse = testing::RunConfluent(
+      {"track", capture, "--masks", gt + "/masks", "--downscale", "17", "--out", dir / "run5"});
+  EXPECT_NE(coarse.exit_code, 0);
+  EXPECT_NE(coarse.stderr_text.find("--downscale: must be within [0, 16]"), std::string::npos) << coarse.stderr_text;
 }
 
 }  // namespace
