@@ -32,7 +32,7 @@ std::optional<int> ShapeSamplesFromArgs(const ParsedArgs& args) {
 }
 
 OptionSpec FitDownscaleOptionSpec() {
-  return {"downscale", "N", "mask reduction for fitting (default 0 = automatic, about 512 px across)"};
+  return {"downscale", "N", "mask reduction for fitting (default 0 = automatic, about 256 px across)"};
 }
 
 std::optional<int> FitDownscaleFromArgs(const ParsedArgs& args) {

@@ -107,7 +107,7 @@ SilhouetteObservations::SilhouetteObservations(const Rig& rig, const std::vector
     const Image& mask = masks[c];
     PreparedView view;
     view.camera = rig.cameras[c];
-    const int factor = downscale > 0 ? downscale : std::max(1, static_cast<int>(std::lround(mask.width / 512.0)));
+    const int factor = downscale > 0 ? downscale : std::max(1, static_cast<int>(std::lround(mask.width / 256.0)));
     cv::Mat full = AsCvMat(mask);
     cv::Mat small;
     view.cols = std::max(1, mask.width / factor);

@@ -23,8 +23,7 @@ namespace confluent {
 // Options of FitTemplateToSilhouettes.
 struct SilhouetteFitOptions {
   int downscale = 0;               // masks are reduced by this factor before the distance transforms;
-                                   // 0 = automatic (about 512 pixels across: at 256, a
-                                   // foot is 5 pixels long and the legs' twist goes unseen)
+                                   // 0 = automatic (about 256 pixels across)
   int max_contour_points = 250;    // contour pixels per camera for the image -> model term
   int rounds = 2;                  // contour re-assignment rounds of the full-body stage
   int max_iterations = 12;         // Levenberg-Marquardt iterations per round
