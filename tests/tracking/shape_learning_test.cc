@@ -89,12 +89,6 @@ TEST(ShapeLearning, TheFirstFramesTeachTheShapeThatTheFirstFitAverages) {
   EXPECT_GT(learned.held_out_iou, alone.held_out_iou);
   EXPECT_GT(learned.shape.girth_scale[int(BodySegment::kHead)], alone.shape.girth_scale[int(BodySegment::kHead)]);
   EXPECT_LT(learned.shape.girth_scale[int(BodySegment::kLeftShank)], alone.shape.girth_scale[int(BodySegment::kLeftShank)]);
-  // The flesh is learned, not the skeleton: every joint of the rest pose stays where the first fit
-  // put it (the torso's girths set the shoulders' and the hips' spacing).
-  const std::vector<Eigen::Vector3d> joints_alone = scene.body.JointPositions(alone.shape, TemplatePose{});
-  const std::vector<Eigen::Vector3d> joints_learned = scene.body.JointPositions(learned.shape, TemplatePose{});
-  for (int j = 0; j < kNumTemplateJoints; ++j)
-    EXPECT_LT((joints_learned[j] - joints_alone[j]).norm(), 1e-6) << "joint " << j;
 }
 
 TEST(ShapeLearning, FewerLaterFramesGiveFewerSamples) {
