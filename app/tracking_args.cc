@@ -32,7 +32,9 @@ std::optional<int> ShapeSamplesFromArgs(const ParsedArgs& args) {
 }
 
 OptionSpec FitDownscaleOptionSpec() {
-  return {"downscale", "N", "mask reduction for fitting (default 0 = automatic, about 256 px across)"};
+  return {"downscale", "N",
+          "mask reduction for fitting (default 0 = automatic: the first frame about 256 px across, "
+          "tracking about 512)"};
 }
 
 std::optional<int> FitDownscaleFromArgs(const ParsedArgs& args) {

@@ -27,6 +27,7 @@ using Eigen::Vector3d;
 void SilhouetteFitOptions::Check() const {
   const std::string owner = "SilhouetteFitOptions.";
   RequireOption(downscale >= 0 && downscale <= 16, owner + "downscale", downscale, "in [0, 16]");
+  RequireOption(automatic_width >= 16, owner + "automatic_width", automatic_width, ">= 16");
   RequireOption(max_contour_points >= 0, owner + "max_contour_points", max_contour_points, ">= 0");
   RequireOption(rounds >= 1, owner + "rounds", rounds, ">= 1");
   RequireOption(max_iterations >= 1, owner + "max_iterations", max_iterations, ">= 1");
@@ -97,9 +98,14 @@ Eigen::Vector2d ContourEdgeOffset(const cv::Mat& coverage, const cv::Mat& binary
 
 }  // namespace
 
+int FitReductionFactor(int downscale, int mask_width, int automatic_width) {
+  if (downscale > 0) return downscale;
+  return std::max(1, static_cast<int>(std::lround(mask_width / static_cast<double>(automatic_width))));
+}
+
 SilhouetteObservations::SilhouetteObservations(const Rig& rig, const std::vector<Image>& masks,
                                                const std::vector<bool>& use_camera, int downscale,
-                                               int max_contour_points)
+                                               int max_contour_points, int automatic_width)
     : impl_(std::make_unique<Impl>()) {
   for (int c = 0; c < rig.size(); ++c) {
     if (!use_camera.empty() && !use_camera[c]) continue;
@@ -107,7 +113,7 @@ SilhouetteObservations::SilhouetteObservations(const Rig& rig, const std::vector
     const Image& mask = masks[c];
     PreparedView view;
     view.camera = rig.cameras[c];
-    const int factor = downscale > 0 ? downscale : std::max(1, static_cast<int>(std::lround(mask.width / 256.0)));
+    const int factor = FitReductionFactor(downscale, mask.width, automatic_width);
     cv::Mat full = AsCvMat(mask);
     cv::Mat small;
     view.cols = std::max(1, mask.width / factor);

@@ -23,7 +23,8 @@ namespace confluent {
 // Options of FitTemplateToSilhouettes.
 struct SilhouetteFitOptions {
   int downscale = 0;               // masks are reduced by this factor before the distance transforms;
-                                   // 0 = automatic (about 256 pixels across)
+                                   // 0 = automatic (about automatic_width pixels across)
+  int automatic_width = 256;
   int max_contour_points = 250;    // contour pixels per camera for the image -> model term
   int rounds = 2;                  // contour re-assignment rounds of the full-body stage
   int max_iterations = 12;         // Levenberg-Marquardt iterations per round
@@ -70,13 +71,18 @@ struct SilhouetteFitSummary {
   double seconds = 0.0;
 };
 
+// The factor a mask `mask_width` pixels wide is reduced by: `downscale`, or when 0 the one that
+// brings it to about `automatic_width` pixels across (at least 1).
+int FitReductionFactor(int downscale, int mask_width, int automatic_width);
+
 // One frame's observations prepared for fitting (distance transforms, contour rays).
 class SilhouetteObservations {
  public:
   // Prepares the masks (1-channel 8-bit, 0/255, camera size) of the cameras with
   // `use_camera[i]` (all when empty); masks of unused cameras may be empty images.
+  // `downscale` as SilhouetteFitOptions::downscale (0: about `automatic_width` pixels across).
   SilhouetteObservations(const Rig& rig, const std::vector<Image>& masks, const std::vector<bool>& use_camera,
-                         int downscale, int max_contour_points);
+                         int downscale, int max_contour_points, int automatic_width = 256);
   ~SilhouetteObservations();
   SilhouetteObservations(SilhouetteObservations&&) noexcept;
   SilhouetteObservations& operator=(SilhouetteObservations&&) noexcept;

@@ -78,6 +78,7 @@ std::size_t HashMask(const Image& mask) {
 void TrackerOptions::Check() const {
   fit.Check();
   const std::string owner = "TrackerOptions.";
+  RequireOption(init_width >= 16, owner + "init_width", init_width, ">= 16");
   RequireOption(init_rounds >= 1, owner + "init_rounds", init_rounds, ">= 1");
   RequireOption(init_max_iterations >= 1, owner + "init_max_iterations", init_max_iterations, ">= 1");
   RequireOption(skirt_min_iou_gain >= 0 && skirt_min_iou_gain < 1, owner + "skirt_min_iou_gain", skirt_min_iou_gain,
@@ -193,6 +194,30 @@ void Tracker::SearchSkirtShape(const std::vector<Image>& masks, const std::vecto
   result->flags.push_back("skirt:" + cm(shape_.skirt_length_m) + "cm+" + cm(shape_.skirt_flare_m) + "cm");
 }
 
+SilhouetteObservations Tracker::Observations(const std::vector<Image>& masks, const std::vector<bool>& use) const {
+  return SilhouetteObservations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points,
+                                options_.fit.automatic_width);
+}
+
+void Tracker::RefitFirstFrame(const std::vector<Image>& masks, const std::vector<bool>& use,
+                              const SilhouetteObservations& observations, TrackedFrame* result) {
+  bool same_scale = true;
+  for (int c = 0; c < rig_.size(); ++c) {
+    if (!use[c]) continue;
+    same_scale &= FitReductionFactor(options_.fit.downscale, masks[c].width, options_.init_width) ==
+                  FitReductionFactor(options_.fit.downscale, masks[c].width, options_.fit.automatic_width);
+  }
+  if (same_scale) return;
+  SilhouetteFitOptions refit = options_.fit;
+  refit.rest_prior_scale = init_rest_prior_scale_;
+  const TemplatePose first_pose = result->pose;
+  result->fit = FitTemplateToSilhouettes(body_, observations, refit, &shape_, &result->pose, &first_pose);
+  Evaluate(shape_, masks, use, result);
+  history_ = {result->pose};
+  iou_history_ = {result->mean_iou};
+  contour_history_ = {result->fit.mean_contour_px};
+}
+
 void Tracker::InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result) {
   if (options_.girth_inflation_max <= 0.0 || result->mean_iou >= options_.girth_inflation_below_iou) return;
   TrackedFrame best = *result;
@@ -306,7 +331,8 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
     result.flags.push_back("no_hull");
     return result;
   }
-  const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);
+  const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points,
+                                            options_.init_width);
   // Without and with the wrists' pull towards straight hands (JointDof::rest_weight): a boxer's
   // guard comes out with arms 10% short without it (Bandai's kick and punch), a hand bent across
   // the forearm turns the forearm with it (the Indian dance: wrists 12 cm off).
@@ -344,7 +370,9 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   iou_history_.push_back(result.mean_iou);
   contour_history_.push_back(result.fit.mean_contour_px);
   for (const Image& m : masks) last_mask_hashes_.push_back(HashMask(m));
-  LearnShapeOverFirstFrames(masks, use, observations, &result);
+  const SilhouetteObservations tracking_observations = Observations(masks, use);
+  RefitFirstFrame(masks, use, tracking_observations, &result);
+  LearnShapeOverFirstFrames(masks, use, tracking_observations, &result);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   return result;
@@ -422,7 +450,7 @@ TrackedFrame Tracker::Track(int frame, const std::vector<Image>& masks) {
       for (int j : {kJointLeftWrist, kJointRightWrist}) predicted.dofs[j] = last.dofs[j];
     body_.ClampToLimits(&predicted);
   }
-  const SilhouetteObservations observations(rig_, masks, use, options_.fit.downscale, options_.fit.max_contour_points);
+  const SilhouetteObservations observations = Observations(masks, use);
   result.pose = predicted;
   result.fit = FitTemplateToSilhouettes(body_, observations, options_.fit, &shape_, &result.pose, &predicted);
   Evaluate(shape_, masks, use, &result);

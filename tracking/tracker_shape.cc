@@ -11,8 +11,9 @@ namespace confluent {
 namespace {
 
 // `base` with each girth, cross-section and skirt parameter the median over `shapes` (not
-// empty); the lengths stay `base`'s.
-BodyShape MedianGirthsAndSections(const BodyShape& base, const std::vector<BodyShape>& shapes) {
+// empty). The skeleton stays `base`'s: its lengths, and the girths of the torso pieces, which set
+// how far apart the shoulders and the hips sit (RestPositions).
+BodyShape MedianGirthsAndSections(const BodyTemplate& body, const BodyShape& base, const std::vector<BodyShape>& shapes) {
   auto median_of = [&](auto value_of) {
     std::vector<double> values;
     for (const BodyShape& shape : shapes) values.push_back(value_of(shape));
@@ -25,6 +26,10 @@ BodyShape MedianGirthsAndSections(const BodyShape& base, const std::vector<BodyS
     median.taper_scale[s] = median_of([s](const BodyShape& b) { return b.taper_scale[s]; });
     median.depth_offset[s] = median_of([s](const BodyShape& b) { return b.depth_offset[s]; });
     median.mid_bulge[s] = median_of([s](const BodyShape& b) { return b.mid_bulge[s]; });
+  }
+  for (int joint : {kJointLeftShoulder, kJointRightShoulder, kJointLeftHip, kJointRightHip}) {
+    const int torso = body.offset_segment()[joint];
+    median.girth_scale[torso] = base.girth_scale[torso];
   }
   median.skirt_length_m = median_of([](const BodyShape& b) { return b.skirt_length_m; });
   median.skirt_flare_m = median_of([](const BodyShape& b) { return b.skirt_flare_m; });
@@ -76,14 +81,13 @@ void Tracker::LearnShapeOverFirstFrames(const std::vector<Image>& masks, const s
   for (const Sample& sample : samples) {
     std::vector<std::string> flags;
     const std::vector<bool> sample_use = UsableCameras(sample.masks, &flags);
-    fit_shape(SilhouetteObservations(rig_, sample.masks, sample_use, options_.fit.downscale,
-                                     options_.fit.max_contour_points),
-              sample.pose, options_.fit.rest_prior_scale);
+    fit_shape(Observations(sample.masks, sample_use), sample.pose, options_.fit.rest_prior_scale);
   }
   // The first frame again with the learned shape, from its pose.
-  // The lengths stay the first fit's: silhouettes place a joint along its limb poorly, and the
-  // free fits' lengths moved the joints (builtin's 0.44 -> 0.97 cm mean error at 1024x768).
-  shape_ = MedianGirthsAndSections(shape_, shapes);
+  // The skeleton stays the first fit's: silhouettes place a joint along its limb poorly, and the
+  // free fits' lengths moved the joints (builtin's 0.44 -> 0.97 cm mean error at 1024x768), their
+  // torso girths the shoulders (1.2 cm apart each on builtin, fitted at 512 pixels across).
+  shape_ = MedianGirthsAndSections(body_, shape_, shapes);
   const TemplatePose first_pose = result->pose;
   result->fit = FitTemplateToSilhouettes(body_, observations, first_frame_fit, &shape_, &result->pose, &first_pose);
   Evaluate(shape_, masks, use, result);

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "calib/rig_check.h"
+#include "core/error.h"
 #include "silhouette/overlap.h"
 #include "tracking/tracker.h"
 #include "tests/support/camera_ring.h"
@@ -256,6 +257,24 @@ TEST(SilhouetteFit, CrouchedFirstFrameFindsTheBodysSizeAndProportions) {
   for (BodySegment s : {BodySegment::kUpperTorso, BodySegment::kLowerTorso, BodySegment::kLeftThigh,
                         BodySegment::kLeftUpperArm, BodySegment::kLeftForearm, BodySegment::kNeck})
     EXPECT_NEAR(fitted.length_scale[int(s)], 1.0, 0.05) << BodySegmentName(int(s));
+}
+
+TEST(SilhouetteFit, MasksAreReducedToTheRequestedWidthUnlessTheFactorIsGiven) {
+  EXPECT_EQ(FitReductionFactor(0, 1024, 256), 4);
+  EXPECT_EQ(FitReductionFactor(0, 1024, 512), 2);
+  EXPECT_EQ(FitReductionFactor(0, 1920, 512), 4);  // 3.75 rounded
+  EXPECT_EQ(FitReductionFactor(0, 320, 512), 1);   // never enlarged
+  EXPECT_EQ(FitReductionFactor(3, 1024, 256), 3);  // an explicit factor wins
+  // The tracker tracks at about 512 pixels across and fits the first frame at 256.
+  const TrackerOptions defaults;
+  EXPECT_EQ(FitReductionFactor(defaults.fit.downscale, 1024, defaults.fit.automatic_width), 2);
+  EXPECT_EQ(FitReductionFactor(defaults.fit.downscale, 1024, defaults.init_width), 4);
+  TrackerOptions narrow;
+  narrow.init_width = 8;
+  EXPECT_THROW(narrow.Check(), UsageError);
+  SilhouetteFitOptions fit;
+  fit.automatic_width = 0;
+  EXPECT_THROW(fit.Check(), UsageError);
 }
 
 }  // namespace
