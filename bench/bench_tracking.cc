@@ -101,11 +101,13 @@ const Sequence& GetLongSequence() {
   return sequence;
 }
 
-// Distance transforms and contour rays of one frame (8 cameras).
+// Distance transforms and contour rays of one frame (8 cameras), at the per-frame fit's scale.
 void BM_PrepareObservations(benchmark::State& state) {
   const Sequence& s = GetSequence();
+  const SilhouetteFitOptions fit = TrackerOptions().fit;
   for (auto _ : state) {
-    const SilhouetteObservations observations(s.rig, s.masks[1], {}, 0, 250);
+    const SilhouetteObservations observations(s.rig, s.masks[1], {}, fit.downscale, fit.max_contour_points,
+                                              fit.automatic_width);
     benchmark::DoNotOptimize(observations.num_used_cameras());
   }
 }
