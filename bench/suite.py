@@ -319,8 +319,21 @@ def write_table(path, results, header, contact_sheet):
               f"more than {LIMB_OFF_CM:.0f} cm from the studio's joint (in brackets: the largest such error over the frames, "
               f"and its joint). Worst frames: by held-out scan IoU (worst camera); their side-by-side pictures are in {contact_sheet}.",
               ""]
+    kept = kept_sections(path)
     with open(path, "w") as f:
-        f.write("\n".join(lines))
+        f.write("\n".join(lines) + ("\n" + kept if kept else ""))
+
+
+def kept_sections(path):
+    """The dated sections written by hand below the generated table (from the first '## ' heading on):
+    a new table replaces the old one and keeps them."""
+    try:
+        with open(path) as f:
+            text = f.read()
+    except FileNotFoundError:
+        return ""
+    start = text.find("\n## ")
+    return text[start + 1:] if start >= 0 else ""
 
 
 def write_contact_sheet(path, results):
@@ -360,7 +373,8 @@ def main():
     parser.add_argument("--only", help="comma-separated capture names")
     parser.add_argument("--out", default="/tmp/confluent-suite", help="work folder")
     parser.add_argument("--threads", "--jobs", type=int, help="passed to synth and run as --threads")
-    parser.add_argument("--table", help="Markdown table (default bench/SUITE.md; tiny: WORK/tiny/SUITE.md)")
+    parser.add_argument("--table", help="Markdown table (default bench/SUITE.md; tiny: WORK/tiny/SUITE.md); "
+                        "the file's dated '## ' sections below the table are kept")
     parser.add_argument("--floors", help="JSON of per-capture floors (default bench/suite_floors_<preset>.json)")
     parser.add_argument("--check", action="store_true",
                         help="exit 1 when a metric is below its floor; without --only, only the captures the floors file names")
