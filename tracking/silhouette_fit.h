@@ -20,11 +20,14 @@
 
 namespace confluent {
 
+// The width masks are reduced to for fitting when no factor is given (SilhouetteFitOptions).
+constexpr int kDefaultFitWidth = 256;
+
 // Options of FitTemplateToSilhouettes.
 struct SilhouetteFitOptions {
   int downscale = 0;               // masks are reduced by this factor before the distance transforms;
                                    // 0 = automatic (about automatic_width pixels across)
-  int automatic_width = 256;
+  int automatic_width = kDefaultFitWidth;
   int max_contour_points = 250;    // contour pixels per camera for the image -> model term
   int rounds = 2;                  // contour re-assignment rounds of the full-body stage
   int max_iterations = 12;         // Levenberg-Marquardt iterations per round
@@ -82,7 +85,7 @@ class SilhouetteObservations {
   // `use_camera[i]` (all when empty); masks of unused cameras may be empty images.
   // `downscale` as SilhouetteFitOptions::downscale (0: about `automatic_width` pixels across).
   SilhouetteObservations(const Rig& rig, const std::vector<Image>& masks, const std::vector<bool>& use_camera,
-                         int downscale, int max_contour_points, int automatic_width = 256);
+                         int downscale, int max_contour_points, int automatic_width = kDefaultFitWidth);
   ~SilhouetteObservations();
   SilhouetteObservations(SilhouetteObservations&&) noexcept;
   SilhouetteObservations& operator=(SilhouetteObservations&&) noexcept;

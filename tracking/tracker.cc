@@ -199,23 +199,28 @@ SilhouetteObservations Tracker::Observations(const std::vector<Image>& masks, co
                                 options_.fit.automatic_width);
 }
 
+bool Tracker::InitScaleIsTrackingScale(const std::vector<Image>& masks, const std::vector<bool>& use) const {
+  for (int c = 0; c < rig_.size(); ++c)
+    if (use[c] && FitReductionFactor(options_.fit.downscale, masks[c].width, options_.init_width) !=
+                      FitReductionFactor(options_.fit.downscale, masks[c].width, options_.fit.automatic_width))
+      return false;
+  return true;
+}
+
 void Tracker::RefitFirstFrame(const std::vector<Image>& masks, const std::vector<bool>& use,
                               const SilhouetteObservations& observations, TrackedFrame* result) {
-  bool same_scale = true;
-  for (int c = 0; c < rig_.size(); ++c) {
-    if (!use[c]) continue;
-    same_scale &= FitReductionFactor(options_.fit.downscale, masks[c].width, options_.init_width) ==
-                  FitReductionFactor(options_.fit.downscale, masks[c].width, options_.fit.automatic_width);
-  }
-  if (same_scale) return;
   SilhouetteFitOptions refit = options_.fit;
   refit.rest_prior_scale = init_rest_prior_scale_;
   const TemplatePose first_pose = result->pose;
   result->fit = FitTemplateToSilhouettes(body_, observations, refit, &shape_, &result->pose, &first_pose);
   Evaluate(shape_, masks, use, result);
-  history_ = {result->pose};
-  iou_history_ = {result->mean_iou};
-  contour_history_ = {result->fit.mean_contour_px};
+  RestartHistoryAt(*result);
+}
+
+void Tracker::RestartHistoryAt(const TrackedFrame& frame) {
+  history_ = {frame.pose};
+  iou_history_ = {frame.mean_iou};
+  contour_history_ = {frame.fit.mean_contour_px};
 }
 
 void Tracker::InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result) {
@@ -366,13 +371,15 @@ TrackedFrame Tracker::Initialize(int frame, const std::vector<Image>& masks) {
   InflateGirths(masks, use, &result);
   result.flags.push_back("initialized");
   initialized_ = true;
-  history_.push_back(result.pose);
-  iou_history_.push_back(result.mean_iou);
-  contour_history_.push_back(result.fit.mean_contour_px);
+  RestartHistoryAt(result);
   for (const Image& m : masks) last_mask_hashes_.push_back(HashMask(m));
-  const SilhouetteObservations tracking_observations = Observations(masks, use);
-  RefitFirstFrame(masks, use, tracking_observations, &result);
-  LearnShapeOverFirstFrames(masks, use, tracking_observations, &result);
+  // Fitted at a coarser scale than the frames after it: fitted again at theirs.
+  std::optional<SilhouetteObservations> finer;
+  if (!InitScaleIsTrackingScale(masks, use)) {
+    finer = Observations(masks, use);
+    RefitFirstFrame(masks, use, *finer, &result);
+  }
+  LearnShapeOverFirstFrames(masks, use, finer ? *finer : observations, &result);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   return result;

@@ -278,10 +278,14 @@ class Tracker {
   void InflateGirths(const std::vector<Image>& masks, const std::vector<bool>& use, TrackedFrame* result);
   // The masks prepared for the per-frame fit (TrackerOptions::fit's scale).
   SilhouetteObservations Observations(const std::vector<Image>& masks, const std::vector<bool>& use) const;
-  // The first frame's pose fitted again on `observations` (the per-frame scale) when Initialize
-  // fitted it at another (TrackerOptions::init_width), the shape kept.
+  // Whether Initialize's scale (TrackerOptions::init_width) reduces every used camera's mask as
+  // the per-frame fit's does.
+  bool InitScaleIsTrackingScale(const std::vector<Image>& masks, const std::vector<bool>& use) const;
+  // The first frame's pose fitted again on `observations` (the per-frame scale), the shape kept.
   void RefitFirstFrame(const std::vector<Image>& masks, const std::vector<bool>& use,
                        const SilhouetteObservations& observations, TrackedFrame* result);
+  // The accepted poses, overlaps and contour residuals restarted at `frame` alone.
+  void RestartHistoryAt(const TrackedFrame& frame);
   // Initialize's fit of the first frame from `start_shape`, with the pulls towards rest angles
   // scaled by `rest_prior_scale`; the shape in `fitted_shape`.
   TrackedFrame FitFirstFrame(int frame, const std::vector<Image>& masks, const std::vector<bool>& use,

@@ -92,9 +92,7 @@ void Tracker::LearnShapeOverFirstFrames(const std::vector<Image>& masks, const s
   result->fit = FitTemplateToSilhouettes(body_, observations, first_frame_fit, &shape_, &result->pose, &first_pose);
   Evaluate(shape_, masks, use, result);
   result->flags.push_back("shape:" + std::to_string(shapes.size()));
-  history_ = {result->pose};
-  iou_history_ = {result->mean_iou};
-  contour_history_ = {result->fit.mean_contour_px};
+  RestartHistoryAt(*result);
 }
 
 }  // namespace confluent
