@@ -23,6 +23,7 @@ void MultiViewOptions::Check() const {
   RequireOption(ghost_margin >= 0 && ghost_margin <= 100, owner + "ghost_margin", ghost_margin, "in [0, 100]");
   RequireOption(hole_margin >= 0 && hole_margin <= 100, owner + "hole_margin", hole_margin, "in [0, 100]");
   RequireOption(hole_close >= 0 && hole_close <= 200, owner + "hole_close", hole_close, "in [0, 200]");
+  RequireOption(claim_margin >= 0 && claim_margin <= 100, owner + "claim_margin", claim_margin, "in [0, 100]");
   RequireOption(min_confidence >= 0 && min_confidence <= 1, owner + "min_confidence", min_confidence, "in [0, 1]");
   RequireOption(max_hull_volume_m3 >= 0, owner + "max_hull_volume_m3", max_hull_volume_m3, ">= 0");
   RequireOption(threads >= 1, owner + "threads", threads, ">= 1");
@@ -258,6 +259,22 @@ Image ProjectColumnsAboveTop(const Camera& camera, const HullUnderside& hull, do
   return DrawVerticalSegments(camera, hull.voxel_m, segments);
 }
 
+std::vector<Image> LooseHullsOfTheOthers(const Rig& rig, const std::vector<Image>& masks, const MultiViewOptions& options) {
+  options.Check();
+  const int n = rig.size();
+  if (static_cast<int>(masks.size()) != n) throw UsageError("LooseHullsOfTheOthers: one mask (or an empty image) per camera");
+  const int with_mask = CountMasks(rig, masks);
+  if (with_mask < 3) return std::vector<Image>(n);
+  MultiViewOptions loose = options;
+  loose.tolerated_rejections = std::min(4, (with_mask - 1) / 2);
+  std::vector<Image> carving;
+  VisualHullOptions hull_options;
+  std::vector<Image> hulls = ToleratedHulls(rig, masks, with_mask, loose, &carving, &hull_options, nullptr);
+  for (int c = 0; c < n; ++c)
+    if (masks[c].empty()) hulls[c] = Image();
+  return hulls;
+}
+
 int ClaimHighlightsInsideHull(Image* mask, const Image& frame, const BackgroundModel& model, const Image& hull,
                               const MultiViewOptions& options) {
   if (frame.width != mask->width || frame.height != mask->height || hull.width != mask->width ||
@@ -266,7 +283,7 @@ int ClaimHighlightsInsideHull(Image* mask, const Image& frame, const BackgroundM
   if (frame.channels != 3 || frame.type != PixelType::kUInt8)
     throw UsageError("ClaimHighlightsInsideHull: the frame must be 8-bit RGB");
   // Only the hull's box (with room for the closing) is worked on.
-  const int deep = ScaledRadius(options.hole_margin, mask->width);
+  const int deep = ScaledRadius(options.claim_margin, mask->width);
   const cv::Rect box = cv::boundingRect(AsCvMat(hull));
   if (box.empty()) return 0;
   const cv::Rect roi =

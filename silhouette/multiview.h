@@ -30,6 +30,9 @@ struct MultiViewOptions {
   // the mask, are filled (per 1000 pixels of width, as above).
   double hole_margin = 6.0;
   double hole_close = 40.0;
+  // Highlights claimed for plate masks (ClaimHighlightsInsideHull): pixels at least this deep
+  // inside the others' hull (per 1000 pixels of width).
+  double claim_margin = 3.0;
   // A camera-frame whose confidence is below this is flagged.
   double min_confidence = 0.8;
   // The largest hull (of every camera's mask) one person may carve, cubic metres: a person is
@@ -88,9 +91,17 @@ Image ProjectColumnsToFloor(const Camera& camera, const HullUnderside& underside
 // learned background), so that the hull ends at the shoulders.
 Image ProjectColumnsAboveTop(const Camera& camera, const HullUnderside& hull, double near_top_m, double height_m);
 
+// Each camera's projected hull of the others, loose: a voxel stays unless more than half of the
+// other cameras with a mask reject it (at most 4), so that a hole several cameras share (skin
+// over a floor of its colour, seen against the same tiles) does not carve it. Masks as
+// CheckMultiView's (empty: no mask); the hull of a camera without a mask is empty, and every hull
+// is empty with fewer than 3 masks. Throws InputError naming a camera whose mask differs in size
+// from its calibration.
+std::vector<Image> LooseHullsOfTheOthers(const Rig& rig, const std::vector<Image>& masks, const MultiViewOptions& options);
+
 // Claims for `mask` (1-channel 0/255, made with `model` from a clean plate) the pixels of
 // `frame` (8-bit RGB) that the model calls a highlight of the background where `hull` (the
-// other cameras' projected hull, closed and eroded by options.hole_margin) says the actor is:
+// other cameras' projected hull, closed and eroded by options.claim_margin) says the actor is:
 // skin over a beige floor is a "highlight" of the floor. Shadows are left alone: the actor's own
 // shadow lies on the floor beside the feet, which a coarse hull covers. Returns the number of
 // pixels added. Throws UsageError when the sizes differ.

@@ -240,6 +240,69 @@ TEST(MultiView, HighlightsInsideTheOthersHullAreClaimedButNotShadowsOrHighlights
                UsageError);
 }
 
+// Skin over a floor of its colour is lost by several cameras at once (samba's legs over beige
+// tiles): three of cam1's others lose the same part of a leg, which carves it out of the
+// tolerant hull of cam1's others (one rejection tolerated), but not out of the loose one (more
+// than half of the others must reject a voxel). Against the loose hull cam1's highlight there
+// is claimed.
+TEST(MultiView, APartSeveralCamerasLoseStaysInTheLooseHullOfTheOthers) {
+  const Rig rig = testing::MakeRingRig(8, 320, 240);
+  const auto actor = testing::MakeActor(0.0, 0.0, 0.3);
+  std::vector<Image> masks;
+  for (const Camera& camera : rig.cameras) masks.push_back(testing::RenderMask(camera, actor));
+  // The left leg between 0.3 and 0.5 m, as each camera sees it: a box around its projection.
+  auto leg_box = [&](int c) {
+    cv::Rect box;
+    for (double z : {0.3, 0.5})
+      for (double dx : {-0.08, 0.08})
+        for (double dy : {-0.08, 0.08}) {
+          const Eigen::Vector2d p = rig.cameras[c].Project(Eigen::Vector3d(-0.1 + dx, dy, z));
+          const cv::Rect point(static_cast<int>(p.x()), static_cast<int>(p.y()), 1, 1);
+          box = box.empty() ? point : (box | point);
+        }
+    return box;
+  };
+  const int t = 1;  // sees the legs side by side
+  for (int c : {0, 2, 4, t}) {
+    const cv::Rect box = leg_box(c);
+    Fill(&masks[c], box.x, box.y, box.x + box.width, box.y + box.height, 0);
+  }
+  const cv::Rect lost = leg_box(t);
+  const Eigen::Vector2d inside_leg = rig.cameras[t].Project(Eigen::Vector3d(-0.1, 0.0, 0.4));
+  const int lx = static_cast<int>(inside_leg.x()), ly = static_cast<int>(inside_leg.y());
+  ASSERT_EQ(masks[t].at<std::uint8_t>(lx, ly), 0);
+  std::vector<Image> tolerant;
+  CheckMultiView(rig, &masks, {}, MultiViewOptions{}, &tolerant);
+  const std::vector<Image> loose = LooseHullsOfTheOthers(rig, masks, MultiViewOptions{});
+  ASSERT_EQ(loose.size(), masks.size());
+  EXPECT_EQ(tolerant[t].at<std::uint8_t>(lx, ly), 0);  // cams 0, 2 and 4 carve it
+  EXPECT_EQ(loose[t].at<std::uint8_t>(lx, ly), 255);
+  // Nothing far from the actor joins the loose hull.
+  EXPECT_EQ(loose[t].at<std::uint8_t>(5, 5), 0);
+  EXPECT_EQ(loose[t].at<std::uint8_t>(315, 235), 0);
+
+  // cam1's frame: a grey plate, the lost part of the leg a highlight of it.
+  Image plate(320, 240, 3);
+  std::fill(plate.data.begin(), plate.data.end(), 100);
+  const BackgroundModel model = BackgroundModel::FromPlates({plate}, BackgroundModelOptions{});
+  Image frame = plate;
+  const Image truth = testing::RenderMask(rig.cameras[t], actor);
+  for (int y = lost.y; y < lost.y + lost.height; ++y)
+    for (int x = lost.x; x < lost.x + lost.width; ++x)
+      if (truth.at<std::uint8_t>(x, y) != 0)
+        for (int k = 0; k < 3; ++k) frame.at<std::uint8_t>(x, y, k) = 125;
+  Image with_tolerant = masks[t], with_loose = masks[t];
+  ClaimHighlightsInsideHull(&with_tolerant, frame, model, tolerant[t], MultiViewOptions{});
+  EXPECT_GT(ClaimHighlightsInsideHull(&with_loose, frame, model, loose[t], MultiViewOptions{}), 0);
+  EXPECT_EQ(with_loose.at<std::uint8_t>(lx, ly), 255);
+  EXPECT_GT(Iou(with_loose, truth), Iou(with_tolerant, truth) + 0.01);
+  // Fewer than 3 masks: no hulls.
+  std::vector<Image> two(masks.size());
+  two[0] = masks[0];
+  two[1] = masks[1];
+  for (const Image& hull : LooseHullsOfTheOthers(rig, two, MultiViewOptions{})) EXPECT_TRUE(hull.empty());
+}
+
 TEST(MultiView, TrustAssessmentWarnsAboutAShiftedCameraOnly) {
   const Rig rig = testing::MakeRingRig(6, 160, 120);
   auto read = [&](bool shift_cam1) {
