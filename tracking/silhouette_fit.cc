@@ -44,6 +44,8 @@ void SilhouetteFitOptions::Check() const {
                 "in (0, 1]");
   RequireOption(max_section_scale >= 1 && max_section_scale <= 3, owner + "max_section_scale", max_section_scale,
                 "in [1, 3]");
+  RequireOption(depth_offset_prior_weight >= 0, owner + "depth_offset_prior_weight", depth_offset_prior_weight,
+                ">= 0");
   RequireOption(max_depth_offset >= 0 && max_depth_offset <= 1, owner + "max_depth_offset", max_depth_offset,
                 "in [0, 1]");
   RequireOption(max_mid_bulge >= 0 && max_mid_bulge <= 1, owner + "max_mid_bulge", max_mid_bulge, "in [0, 1]");
@@ -297,11 +299,11 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
     // Cross-sections: a pull towards the generic template's, within plausible bodies.
     Eigen::VectorXd generic(ti::kSectionBlockSize);
     for (int i = 0; i < ti::kSectionBlockSize; ++i) generic[i] = ti::DefaultSectionValue(i);
-    problem.AddResidualBlock(
-        new ceres::NormalPrior(Eigen::MatrixXd::Identity(ti::kSectionBlockSize, ti::kSectionBlockSize) *
-                                   options.section_prior_weight,
-                               generic),
-        nullptr, fp->section);
+    Eigen::MatrixXd weights = Eigen::MatrixXd::Identity(ti::kSectionBlockSize, ti::kSectionBlockSize) *
+                              options.section_prior_weight;
+    for (int i = 2 * ti::kNumShapeGroups; i < 3 * ti::kNumShapeGroups; ++i)
+      weights(i, i) = options.depth_offset_prior_weight;
+    problem.AddResidualBlock(new ceres::NormalPrior(weights, generic), nullptr, fp->section);
     for (int i = 0; i < ti::kSectionBlockSize; ++i) {
       const int kind = i / ti::kNumShapeGroups;  // depth, taper, offset, bulge
       const double lo = kind == 2 ? -options.max_depth_offset : kind == 3 ? -options.max_mid_bulge : options.min_section_scale;

@@ -56,6 +56,10 @@ struct SilhouetteFitOptions {
   double min_section_scale = 0.7;
   double max_section_scale = 1.5;
   double max_depth_offset = 0.4;
+  // Weight of the pull of the torso's depth offsets towards 0 (replaces section_prior_weight for
+  // them): an offset moves the bone inside an unchanged outline, so only the joints it connects
+  // (hips, shoulders) see it, and a bent torso trades it for the pelvis's pitch.
+  double depth_offset_prior_weight = 100.0;
   double max_mid_bulge = 0.3;
   int num_threads = 2;
   // Throws UsageError for out-of-range values.

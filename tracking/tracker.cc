@@ -75,6 +75,17 @@ std::size_t HashMask(const Image& mask) {
 
 }  // namespace
 
+SilhouetteFitOptions TrackerOptions::InitialShapeFit(const SilhouetteFitOptions& base) const {
+  SilhouetteFitOptions options = base;
+  options.fit_shape = true;
+  options.rounds = init_rounds;
+  options.max_iterations = init_max_iterations;
+  options.prior_weight = 0.2;
+  options.shape_prior_weight = init_shape_prior_weight;
+  options.shape_proportion_weight = init_shape_proportion_weight;
+  return options;
+}
+
 void TrackerOptions::Check() const {
   fit.Check();
   const std::string owner = "TrackerOptions.";
@@ -273,13 +284,7 @@ TrackedFrame Tracker::FitFirstFrame(int frame, const std::vector<Image>& masks, 
     }
   }
   // Joint shape-and-pose fit from the best hypothesis, then a final pose refinement.
-  SilhouetteFitOptions shape_options = init_fit;
-  shape_options.fit_shape = true;
-  shape_options.rounds = options_.init_rounds;
-  shape_options.max_iterations = options_.init_max_iterations;
-  shape_options.prior_weight = 0.2;
-  shape_options.shape_prior_weight = options_.init_shape_prior_weight;
-  shape_options.shape_proportion_weight = options_.init_shape_proportion_weight;
+  const SilhouetteFitOptions shape_options = options_.InitialShapeFit(init_fit);
   SilhouetteFitOptions refine = init_fit;
   refine.prior_weight = 0.2;
   refine.rounds = 2;

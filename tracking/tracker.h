@@ -161,6 +161,9 @@ struct TrackerOptions {
     girth_inflation_max = max_fraction;
     girth_inflation_below_iou = 1.0;
   }
+  // The first frame's joint shape-and-pose fit (Tracker::Initialize's), on top of `base`, the
+  // options of the first frame's pose fits.
+  SilhouetteFitOptions InitialShapeFit(const SilhouetteFitOptions& base) const;
   // Throws UsageError for out-of-range values.
   void Check() const;
 };

@@ -178,6 +178,7 @@ TEST(SilhouetteFit, RecoversKnownCrossSections) {
   SilhouetteFitOptions options = FullResolutionShapeFit();
   options.shape_prior_weight = 1.0;
   options.section_prior_weight = 1.0;
+  options.depth_offset_prior_weight = 1.0;  // from the true pose the offset is seen (not so in a bent torso)
   const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
   auto fit = [&](bool sections, BodyShape* shape, TemplatePose* pose) {
     SilhouetteFitOptions o = options;
