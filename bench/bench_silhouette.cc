@@ -15,9 +15,12 @@
 
 #include "core/cv_interop.h"
 #include "core/image_io.h"
+#include "core/mesh_ops.h"
 #include "core/video.h"
 #include "silhouette/classify_kernel.h"
 #include "silhouette/disk_morphology.h"
+#include "silhouette/multiview.h"
+#include "silhouette/overlap.h"
 #include "silhouette/silhouette.h"
 
 namespace confluent {
@@ -141,6 +144,48 @@ void BM_ClaimHighlightsOneCamera(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ClaimHighlightsOneCamera)->Unit(benchmark::kMillisecond);
+
+// The multi-view work of one plate-capture frame, 10 cameras at 1024x768 around a person made
+// of ellipsoids, on 2 threads: the confidences' check at 64 voxels (arg 0: all there was
+// before session 61), and with it the loose hull of the others at 128 voxels against which
+// the highlights are claimed (arg 1, ExtractSilhouettes now).
+void BM_PlateFrameMultiView10Cameras(benchmark::State& state) {
+  static const auto* scene = [] {
+    auto* out = new std::pair<Rig, std::vector<Image>>();
+    for (int i = 0; i < 10; ++i) {
+      const double angle = 2 * M_PI * i / 10;
+      out->first.cameras.push_back(LookAtCamera("cam" + std::to_string(i),
+                                                Eigen::Vector3d(3.5 * std::cos(angle), 3.5 * std::sin(angle), 1.5),
+                                                Eigen::Vector3d(0, 0, 0.95), kWidth, kHeight, 900));
+    }
+    // Legs, torso, head, an arm held out: (centre, radii).
+    const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> parts = {
+        {{-0.1, 0, 0.45}, {0.08, 0.08, 0.45}}, {{0.1, 0, 0.45}, {0.08, 0.08, 0.45}},
+        {{0, 0, 1.2}, {0.2, 0.13, 0.35}},      {{0, 0, 1.68}, {0.1, 0.1, 0.12}},
+        {{0.45, 0, 1.35}, {0.3, 0.05, 0.05}}};
+    for (const Camera& camera : out->first.cameras) {
+      cv::Mat mask(kHeight, kWidth, CV_8UC1, cv::Scalar(0));
+      for (const auto& [centre, radii] : parts) {
+        Mesh part = MakeUvSphere(1.0, 16, 24);
+        for (int v = 0; v < part.vertices.rows(); ++v)
+          part.vertices.row(v) = (part.vertices.row(v).transpose().cwiseProduct(radii) + centre).transpose();
+        cv::bitwise_or(mask, AsCvMat(RasterizeClosedMesh(part, camera)), mask);
+      }
+      out->second.push_back(ImageFromCvMat(mask));
+    }
+    return out;
+  }();
+  MultiViewOptions options;
+  options.threads = 2;
+  MultiViewOptions check_only = options;
+  check_only.grid_resolution = 64;
+  for (auto _ : state) {
+    std::vector<Image> masks = scene->second, hulls;
+    benchmark::DoNotOptimize(CheckMultiView(scene->first, &masks, {}, check_only, &hulls));
+    if (state.range(0) == 1) benchmark::DoNotOptimize(LooseHullsOfTheOthers(scene->first, masks, options));
+  }
+}
+BENCHMARK(BM_PlateFrameMultiView10Cameras)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The multi-view correction's closing of a mask (a disk of 41 pixels: MultiViewOptions::hole_close
 // at 1024 pixels of width), worked in the box around the mask (arg 1, as CheckMultiView does) or

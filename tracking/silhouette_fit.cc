@@ -299,15 +299,16 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
     // Cross-sections: a pull towards the generic template's, within plausible bodies.
     Eigen::VectorXd generic(ti::kSectionBlockSize);
     for (int i = 0; i < ti::kSectionBlockSize; ++i) generic[i] = ti::DefaultSectionValue(i);
-    Eigen::MatrixXd weights = Eigen::MatrixXd::Identity(ti::kSectionBlockSize, ti::kSectionBlockSize) *
-                              options.section_prior_weight;
-    for (int i = 2 * ti::kNumShapeGroups; i < 3 * ti::kNumShapeGroups; ++i)
-      weights(i, i) = options.depth_offset_prior_weight;
+    constexpr int kOffsetKind = 2;  // the block holds depths, tapers, offsets, bulges (kNumShapeGroups each)
+    Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(ti::kSectionBlockSize, ti::kSectionBlockSize);
+    for (int i = 0; i < ti::kSectionBlockSize; ++i)
+      weights(i, i) = i / ti::kNumShapeGroups == kOffsetKind ? options.depth_offset_prior_weight
+                                                             : options.section_prior_weight;
     problem.AddResidualBlock(new ceres::NormalPrior(weights, generic), nullptr, fp->section);
     for (int i = 0; i < ti::kSectionBlockSize; ++i) {
-      const int kind = i / ti::kNumShapeGroups;  // depth, taper, offset, bulge
-      const double lo = kind == 2 ? -options.max_depth_offset : kind == 3 ? -options.max_mid_bulge : options.min_section_scale;
-      const double hi = kind == 2 ? options.max_depth_offset : kind == 3 ? options.max_mid_bulge : options.max_section_scale;
+      const int kind = i / ti::kNumShapeGroups;
+      const double lo = kind == kOffsetKind ? -options.max_depth_offset : kind == 3 ? -options.max_mid_bulge : options.min_section_scale;
+      const double hi = kind == kOffsetKind ? options.max_depth_offset : kind == 3 ? options.max_mid_bulge : options.max_section_scale;
       fp->section[i] = std::clamp(fp->section[i], lo, hi);
       problem.SetParameterLowerBound(fp->section, i, lo);
       problem.SetParameterUpperBound(fp->section, i, hi);
