@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "calib/rig_check.h"
 #include "core/cv_interop.h"
@@ -301,6 +302,17 @@ TEST(MultiView, APartSeveralCamerasLoseStaysInTheLooseHullOfTheOthers) {
   two[0] = masks[0];
   two[1] = masks[1];
   for (const Image& hull : LooseHullsOfTheOthers(rig, two, MultiViewOptions{})) EXPECT_TRUE(hull.empty());
+  // Bad input: a mask missing from the list, a mask of another size than its camera's (named).
+  EXPECT_THROW(LooseHullsOfTheOthers(rig, std::vector<Image>(masks.begin(), masks.end() - 1), MultiViewOptions{}),
+               UsageError);
+  std::vector<Image> wrong_size = masks;
+  wrong_size[5] = Image(160, 120, 1);
+  try {
+    LooseHullsOfTheOthers(rig, wrong_size, MultiViewOptions{});
+    ADD_FAILURE() << "a mask of the wrong size was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cam5"), std::string::npos) << e.what();
+  }
 }
 
 TEST(MultiView, TrustAssessmentWarnsAboutAShiftedCameraOnly) {
