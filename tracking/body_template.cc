@@ -40,9 +40,10 @@ JointDof Hinge2(const Vector3d& a0, double lo0, double hi0, const Vector3d& a1, 
   return d;
 }
 
-// Per radian; 5 left the punch's right wrist 7.7 cm off at worst, 15 1.9 cm.
-constexpr double kWristDeviationRestWeight = 15.0;
-constexpr double kWristDeviationRestFade = 10 * kDeg;
+// The pull of a hand bent out of its plane towards straight. Per radian; 5 left the punch's
+// right wrist 7.7 cm off at worst, 15 1.9 cm.
+constexpr double kWristPalmBendRestWeight = 15.0;
+constexpr double kWristPalmBendRestFade = 10 * kDeg;
 
 }  // namespace
 
@@ -90,14 +91,18 @@ BodyTemplate::BodyTemplate(int longitudes) {
     const Vector3d upper_dir = (r[shoulder + 1] - r[shoulder]).normalized();
     const Vector3d hinge = upper_dir.cross(Vector3d::UnitY()).normalized();  // flexion moves the forearm forwards
     dofs_[shoulder + 1] = Hinge(hinge, -5, 155);
-    // The wrist bends the hand across the forearm's plane too (radial and ulnar deviation).
-    const Vector3d deviation = hinge.cross(upper_dir).normalized();
-    dofs_[shoulder + 2] = Hinge2(hinge, -75, 75, deviation, -35, 35);
+    // The wrist bends the hand in its own plane about the elbow's hinge (the rest hand is held
+    // thumb forwards: radial and ulnar deviation) and out of it, towards the palm or the back of
+    // the hand (flexion and extension). The latter reaches 85 degrees: a hand flat on the floor
+    // bends 90 (the suite's cartwheel; a jumper's swung arm 68), and at 35, taken for a sideways
+    // bend, it left the hand's end 7-18 cm off.
+    const Vector3d palm_axis = hinge.cross(upper_dir).normalized();
+    dofs_[shoulder + 2] = Hinge2(hinge, -75, 75, palm_axis, -85, 85);
     // The silhouettes hardly see that bend (a hand is a few pixels wide at the fit's scale), and
     // the fit trades it for a turned forearm (Bandai's punch: elbows 2.5-3 cm off, straight
-    // hands bent sideways). A pull towards a straight hand, with the limits kept for real bends.
-    dofs_[shoulder + 2].rest_weight[1] = kWristDeviationRestWeight;
-    dofs_[shoulder + 2].rest_fade_rad = kWristDeviationRestFade;
+    // hands bent). A pull towards a straight hand, with the limits kept for real bends.
+    dofs_[shoulder + 2].rest_weight[1] = kWristPalmBendRestWeight;
+    dofs_[shoulder + 2].rest_fade_rad = kWristPalmBendRestFade;
     const int hip = side == 0 ? kJointLeftHip : kJointRightHip;
     dofs_[hip] = Ball(-40, 135, -55, 55, -60, 60);
     dofs_[hip + 1] = Hinge(Vector3d::UnitX(), -160, 5);
