@@ -24,6 +24,9 @@ constexpr int kShapeBlockSize = 2 * kNumShapeGroups;
 // Cross-section depth, taper, depth offset and bulge per shape group (BodyShape::depth_scale,
 // taper_scale, depth_offset, mid_bulge), in that order.
 constexpr int kSectionBlockSize = 4 * kNumShapeGroups;
+// What a section block's entry is, by its position.
+enum class SectionKind { kDepth, kTaper, kDepthOffset, kMidBulge };
+constexpr SectionKind SectionKindOf(int i) { return static_cast<SectionKind>(i / kNumShapeGroups); }
 
 // The parameter vectors of a fit: world_from_pelvis = R(root_aa) * root_reference.
 struct FitParams {
@@ -57,7 +60,9 @@ Section<T> SegmentSection(const T* block, int segment) {
   return {block[g], block[kNumShapeGroups + g], block[2 * kNumShapeGroups + g], block[3 * kNumShapeGroups + g]};
 }
 // The default cross-section values of a section block's entry `i` (1, 1, 0, 0 per kind).
-inline double DefaultSectionValue(int i) { return i < 2 * kNumShapeGroups ? 1.0 : 0.0; }
+inline double DefaultSectionValue(int i) {
+  return SectionKindOf(i) == SectionKind::kDepth || SectionKindOf(i) == SectionKind::kTaper ? 1.0 : 0.0;
+}
 // The shape block of `shape` (group means) and back; `skirt` (2 values, may be null) carries
 // the skirt DOFs, `section` (kSectionBlockSize values, may be null) the cross-sections.
 void ShapeToParams(const BodyShape& shape, double* params, double* skirt = nullptr, double* section = nullptr);

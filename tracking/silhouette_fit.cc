@@ -299,16 +299,20 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
     // Cross-sections: a pull towards the generic template's, within plausible bodies.
     Eigen::VectorXd generic(ti::kSectionBlockSize);
     for (int i = 0; i < ti::kSectionBlockSize; ++i) generic[i] = ti::DefaultSectionValue(i);
-    constexpr int kOffsetKind = 2;  // the block holds depths, tapers, offsets, bulges (kNumShapeGroups each)
+    using ti::SectionKind;
     Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(ti::kSectionBlockSize, ti::kSectionBlockSize);
     for (int i = 0; i < ti::kSectionBlockSize; ++i)
-      weights(i, i) = i / ti::kNumShapeGroups == kOffsetKind ? options.depth_offset_prior_weight
-                                                             : options.section_prior_weight;
+      weights(i, i) = ti::SectionKindOf(i) == SectionKind::kDepthOffset ? options.depth_offset_prior_weight
+                                                                      : options.section_prior_weight;
     problem.AddResidualBlock(new ceres::NormalPrior(weights, generic), nullptr, fp->section);
     for (int i = 0; i < ti::kSectionBlockSize; ++i) {
-      const int kind = i / ti::kNumShapeGroups;
-      const double lo = kind == kOffsetKind ? -options.max_depth_offset : kind == 3 ? -options.max_mid_bulge : options.min_section_scale;
-      const double hi = kind == kOffsetKind ? options.max_depth_offset : kind == 3 ? options.max_mid_bulge : options.max_section_scale;
+      const SectionKind kind = ti::SectionKindOf(i);
+      const double lo = kind == SectionKind::kDepthOffset ? -options.max_depth_offset
+                        : kind == SectionKind::kMidBulge  ? -options.max_mid_bulge
+                                                          : options.min_section_scale;
+      const double hi = kind == SectionKind::kDepthOffset ? options.max_depth_offset
+                        : kind == SectionKind::kMidBulge  ? options.max_mid_bulge
+                                                          : options.max_section_scale;
       fp->section[i] = std::clamp(fp->section[i], lo, hi);
       problem.SetParameterLowerBound(fp->section, i, lo);
       problem.SetParameterUpperBound(fp->section, i, hi);
