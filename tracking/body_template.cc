@@ -95,11 +95,12 @@ BodyTemplate::BodyTemplate(int longitudes) {
     // thumb forwards: radial and ulnar deviation, given a wide range) and out of it, towards the
     // palm or its back (flexion and extension, given a narrow one). A hand flat on the floor
     // bends 90 degrees out of its plane (the suite's cartwheel), and at 35 the hand's end stays
-    // 7-18 cm off there; at 85 the cartwheel's and a jumper's hands follow, but the first frame's
-    // fits go wrong elsewhere (the Indian dance's right forearm folded for 6 frames, Bandai's arms
-    // fitted 3% shorter: bench/SUITE.md, session 62), so the range waits for a first frame that keeps 35.
+    // 7-18 cm off there; at 85 the cartwheel's and a jumper's hands follow. The first frame's fits
+    // keep 35 (TrackerOptions::first_frame_wrist_palm_bend_rad): there the wide range folded the
+    // Indian dance's right forearm for 6 frames and fitted Bandai's arms 3% shorter (bench/SUITE.md,
+    // session 62).
     const Vector3d palm_axis = hinge.cross(upper_dir).normalized();
-    dofs_[shoulder + 2] = Hinge2(hinge, -75, 75, palm_axis, -35, 35);
+    dofs_[shoulder + 2] = Hinge2(hinge, -75, 75, palm_axis, -85, 85);
     // The silhouettes hardly see that bend (a hand is a few pixels wide at the fit's scale), and
     // the fit trades it for a turned forearm (Bandai's punch: elbows 2.5-3 cm off, straight
     // hands bent). A pull towards a straight hand, with the limits kept for real bends.

@@ -274,6 +274,12 @@ void SolveStage(const BodyTemplate& body, const SilhouetteObservations::Impl& ob
       continue;
     }
     ti::AddJointPriorAndLimits(body, j, prior.dofs[j].data(), options.prior_weight, block, &problem);
+    if (options.max_wrist_palm_bend_rad >= 0 && (j == kJointLeftWrist || j == kJointRightWrist)) {
+      const double limit = options.max_wrist_palm_bend_rad;
+      block[1] = std::clamp(block[1], -limit, limit);
+      problem.SetParameterLowerBound(block, 1, std::max(body.dofs()[j].lower[1], -limit));
+      problem.SetParameterUpperBound(block, 1, std::min(body.dofs()[j].upper[1], limit));
+    }
     ti::AddJointRestPrior(body, j, options.rest_prior_scale, block, &problem);
   }
   if (!options.fit_pose) {

@@ -39,6 +39,10 @@ struct SilhouetteFitOptions {
   double image_to_model_weight = 1.5;   // relative weight of the image -> model term
   double prior_weight = 2.0;       // weight (per radian) of the prior towards the initial joint angles
   double rest_prior_scale = 1.0;   // scale of the template's pulls towards rest angles (JointDof::rest_weight)
+  // >= 0: the wrists' out-of-plane bend (towards the palm or its back) kept within this angle,
+  // inside the template's range (the first frame's fits start far from the pose, where a wide
+  // range folds a forearm back or bends a boxer's fists); < 0: the template's range.
+  double max_wrist_palm_bend_rad = -1.0;
   double shape_prior_weight = 20.0;     // weight of the prior towards the start's mean scale (uniform body)
   // Weight of the prior towards equal proportions: each group's scale towards the mean of the
   // current lengths (or girths), whatever the overall size. With a weak shape_prior_weight the

@@ -261,6 +261,7 @@ TrackedFrame Tracker::FitFirstFrame(int frame, const std::vector<Image>& masks, 
                                     double rest_prior_scale, BodyShape* fitted_shape) const {
   SilhouetteFitOptions init_fit = options_.fit;
   init_fit.rest_prior_scale = rest_prior_scale;
+  init_fit.max_wrist_palm_bend_rad = options_.first_frame_wrist_palm_bend_rad;
   SilhouetteFitOptions hypothesis_options = init_fit;
   hypothesis_options.prior_weight = 0.2;
   hypothesis_options.rounds = 2;

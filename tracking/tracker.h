@@ -146,6 +146,11 @@ struct TrackerOptions {
   double arm_twist_max_elbow_rad = 20.0 * M_PI / 180.0;
   double arm_twist_bend_rad = 30.0 * M_PI / 180.0;
   double arm_twist_min_gain = 0.002;
+  // The first frame's fits keep the wrists' out-of-plane bend within this (the template allows
+  // 85 degrees, which tracked frames need: hands flat on the floor; from a start far from the
+  // pose it folded the Indian dance's forearm back and shortened Bandai's arms: bench/SUITE.md,
+  // session 62). Negative: the template's range.
+  double first_frame_wrist_palm_bend_rad = 35.0 * M_PI / 180.0;
   // The shape learned over the first frames: the first frame's fit holds the body to human
   // proportions (init_shape_proportion_weight), so a long-haired head, thin shanks or a heavy
   // torso come out as an average body. With later frames' masks (Tracker::UseLaterMasks), the

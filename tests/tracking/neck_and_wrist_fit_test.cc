@@ -67,6 +67,24 @@ TemplatePose TrackStep(const StudioActor& actor, const Pose& pose, const BodyTem
   return fitted;
 }
 
+// Joints of the truth (the actor in `after`), of the template's start (fitted to the actor's
+// joints `fraction` of the way from `before` to `after` at `joint`: the pose a frame earlier) and
+// of the tracking step from there.
+struct TrackedJoints {
+  std::vector<Vector3d> truth, started, fitted;
+};
+TrackedJoints TrackFromPartWay(const StudioActor& actor, const Pose& before, const Pose& after, int joint,
+                               double fraction) {
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(kActorHeightM);
+  Pose earlier = before;
+  earlier.local_rotations[joint] = before.local_rotations[joint].slerp(fraction, after.local_rotations[joint]);
+  const TemplatePose start =
+      FitPoseToJoints(body, shape, JointPositions(actor.skeleton, earlier), nullptr, TemplatePose{});
+  return {JointPositions(actor.skeleton, after), body.JointPositions(shape, start),
+          body.JointPositions(shape, TrackStep(actor, after, body, shape, start))};
+}
+
 TEST(NeckAndWristFit, ABowedHeadAndAHandBentSidewaysAreFollowed) {
   const StudioActor actor = Actor();
   const Pose before = FirstFrame(actor);
@@ -110,17 +128,8 @@ TEST(NeckAndWristFit, AHeadThrownBackAndSidewaysIsFollowed) {
                                       Eigen::Quaterniond(AngleAxisd(0.6, Vector3d::UnitY())) *
                                       Eigen::Quaterniond(AngleAxisd(0.9, Vector3d::UnitX()));
 
-  const BodyTemplate body;
-  const BodyShape shape = BodyShape::Uniform(kActorHeightM);
-  const std::vector<Vector3d> truth = JointPositions(actor.skeleton, after);
   // Started from the pose a frame earlier, already half way there.
-  Pose halfway = before;
-  halfway.local_rotations[kJointNeck] =
-      before.local_rotations[kJointNeck].slerp(0.5, after.local_rotations[kJointNeck]);
-  const TemplatePose start =
-      FitPoseToJoints(body, shape, JointPositions(actor.skeleton, halfway), nullptr, TemplatePose{});
-  const std::vector<Vector3d> fitted = body.JointPositions(shape, TrackStep(actor, after, body, shape, start));
-  const std::vector<Vector3d> started = body.JointPositions(shape, start);
+  const auto [truth, started, fitted] = TrackFromPartWay(actor, before, after, kJointNeck, 0.5);
 
   ASSERT_GT((truth[kJointHeadEnd] - JointPositions(actor.skeleton, before)[kJointHeadEnd]).norm(), 0.15);
   // 2.8 cm each: the rest of the bend is the head's own, which the silhouettes hardly tell apart.
@@ -128,6 +137,52 @@ TEST(NeckAndWristFit, AHeadThrownBackAndSidewaysIsFollowed) {
       << "started " << (started[kJointHead] - truth[kJointHead]).norm() << " m away";
   EXPECT_LT((fitted[kJointHeadEnd] - truth[kJointHeadEnd]).norm(), 0.04)
       << "started " << (started[kJointHeadEnd] - truth[kJointHeadEnd]).norm() << " m away";
+}
+
+// A hand bent 80 degrees out of its own plane, as a hand flat on the floor in a cartwheel (the
+// suite's reach 92 degrees; a jumper's swung arm 68). That is the wrist's flexion and extension,
+// about the forward axis of the rest hand (held thumb forwards): it stopped at 35 degrees (taken
+// for a sideways bend), and the hand's end stayed 7-18 cm off.
+TEST(NeckAndWristFit, AHandBentFarOutOfItsPlaneIsFollowed) {
+  const StudioActor actor = Actor();
+  const Pose before = FirstFrame(actor);
+  Pose after = before;
+  after.local_rotations[kJointLeftWrist] =
+      after.local_rotations[kJointLeftWrist] * Eigen::Quaterniond(AngleAxisd(1.4, Vector3d::UnitY()));
+
+  // Started from the pose a frame earlier, 60% of the way there.
+  const auto [truth, started, fitted] = TrackFromPartWay(actor, before, after, kJointLeftWrist, 0.6);
+
+  ASSERT_GT((truth[kJointLeftHandEnd] - JointPositions(actor.skeleton, before)[kJointLeftHandEnd]).norm(), 0.1);
+  EXPECT_LT((fitted[kJointLeftHandEnd] - truth[kJointLeftHandEnd]).norm(), 0.025)
+      << "started " << (started[kJointLeftHandEnd] - truth[kJointLeftHandEnd]).norm() << " m away";
+  EXPECT_LT((fitted[kJointLeftWrist] - truth[kJointLeftWrist]).norm(), 0.015);
+}
+
+// The first frame's fits keep the wrists' out-of-plane bend within
+// TrackerOptions::first_frame_wrist_palm_bend_rad: the fit option holds it at its limit while
+// the masks show a hand bent 80 degrees.
+TEST(NeckAndWristFit, TheFitsWristLimitOptionHoldsTheOutOfPlaneBend) {
+  const StudioActor actor = Actor();
+  const Pose before = FirstFrame(actor);
+  Pose after = before;
+  after.local_rotations[kJointLeftWrist] =
+      after.local_rotations[kJointLeftWrist] * Eigen::Quaterniond(AngleAxisd(1.4, Vector3d::UnitY()));
+  const BodyTemplate body;
+  const BodyShape shape = BodyShape::Uniform(kActorHeightM);
+  const Rig rig = testing::CameraRing(8, 480, 360);
+  const std::vector<Image> masks = Masks(actor, after, rig);
+  SilhouetteFitOptions options;
+  const double limit = TrackerOptions().first_frame_wrist_palm_bend_rad;
+  ASSERT_LT(limit, body.dofs()[kJointLeftWrist].upper[1]);
+  options.max_wrist_palm_bend_rad = limit;
+  const SilhouetteObservations observations(rig, masks, {}, options.downscale, options.max_contour_points);
+  BodyShape fitted_shape = shape;
+  TemplatePose pose = FitPoseToJoints(body, shape, JointPositions(actor.skeleton, after), nullptr, TemplatePose{});
+  pose.dofs[kJointLeftWrist][1] *= 1.5;  // started beyond the option's limit: clamped into it
+  FitTemplateToSilhouettes(body, observations, options, &fitted_shape, &pose);
+  EXPECT_LE(std::abs(pose.dofs[kJointLeftWrist][1]), limit + 1e-9);
+  EXPECT_GT(std::abs(pose.dofs[kJointLeftWrist][1]), limit - 0.05);  // the masks pull it to the limit
 }
 
 // A torso bowed forward over bent knees (the Indian dance's plie, Bandai's kick). A torso's depth
